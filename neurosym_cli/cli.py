@@ -1,0 +1,112 @@
+"""The `neurosym` console script: picks the subcommand from argv[1] and hands the rest to its Hydra app.
+
+Imports nothing heavy, so `neurosym --help` answers in milliseconds (torch is imported by the commands).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+COMMANDS = {
+    "train": "train",
+    "eval": "eval",
+    "synth": "synth",
+    "retrain": "retrain",
+    "show-program": "show_program",
+}
+AVAILABLE = {"train", "eval"}
+
+USAGE = """usage: neurosym <command> [hydra overrides] [hydra flags]
+
+Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).
+
+commands:
+  train          train the transformer oracle (or a baseline's own model) by backprop through the dynamics
+  eval           evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions
+  synth          synthesize a communication program by MCMC           (not available yet)
+  retrain        retrain the transformer under a synthesized program   (not available yet)
+  show-program   print a synthesized program in the paper's notation   (not available yet)
+
+examples:
+  neurosym train task=random-cross budget=quick
+  neurosym train task=random-grid baseline=dist
+  neurosym eval task=random-cross baseline=hard-attn
+  neurosym train -m seed=0,1,2 hydra/launcher=joblib
+  neurosym <command> --help        groups and options of one command
+  neurosym <command> --cfg job     the composed config, without running
+
+tasks: random-cross, random-grid, unlabeled-goals, two-groups-cross
+baselines: tf-full, hard-attn, dist, no-comm
+budgets: paper, quick, tiny
+"""
+
+# flags whose next argument is their value (Hydra's argparse rejects overrides that follow a flag)
+_VALUED = {"--cfg", "-c", "--package", "-p", "--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
+           "--experimental-rerun"}
+_INFO = {"all", "config", "defaults", "defaults-tree", "plugins", "searchpath"}
+
+
+def hoist_flags(args: list[str]) -> list[str]:
+    """Move flags (and their values) before the overrides, so `neurosym train seed=1 -m ...` works."""
+    flags, rest, i = [], [], 0
+    while i < len(args):
+        a = args[i]
+        if a.startswith("-"):
+            flags.append(a)
+            if (a in _VALUED or (a == "--info" and i + 1 < len(args) and args[i + 1] in _INFO)) and i + 1 < len(args):
+                flags.append(args[i + 1])
+                i += 1
+        else:
+            rest.append(a)
+        i += 1
+    return flags + rest
+
+
+def _complete() -> bool:
+    """Bash completion through Hydra's hook: complete the subcommand, then delegate to its app."""
+    line = os.environ.get("COMP_LINE", "")
+    words = line.split()
+    if len(words) <= 1 or (len(words) == 2 and not line.endswith(" ")):
+        prefix = words[1] if len(words) > 1 else ""
+        print(" ".join(c for c in COMMANDS if c.startswith(prefix)))
+        return True
+    if words[1] not in COMMANDS:
+        return True
+    os.environ["COMP_LINE"] = " ".join([words[0]] + words[2:]) + (" " if line.endswith(" ") else "")
+    sys.argv = [sys.argv[0], *sys.argv[1:]]
+    sys.argv.insert(1, words[1])
+    return False
+
+
+def main() -> None:
+    argv = sys.argv[1:]
+    if argv[:2] == ["-sc", "query=bash"] and "COMP_LINE" in os.environ:
+        if _complete():
+            return
+        argv = sys.argv[1:]
+    if not argv or argv[0] in ("-h", "--help", "help"):
+        sys.stdout.write(USAGE)
+        return
+    if argv[0] in ("--version", "-V"):
+        from neurosym_cli import __version__
+
+        print(f"neurosym {__version__}")
+        return
+    if argv[0].startswith("-sc"):  # `eval "$(neurosym -sc install=bash)"` installs completion
+        argv = ["train", *argv]
+    cmd, rest = argv[0], argv[1:]
+    if cmd not in COMMANDS:
+        print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
+        raise SystemExit(2)
+    if cmd not in AVAILABLE:
+        print(f"neurosym: error: `neurosym {cmd}` is not available yet in this version", file=sys.stderr)
+        raise SystemExit(2)
+    sys.argv = [f"neurosym {cmd}", *hoist_flags(rest)]
+    from neurosym_cli.commands import apps
+
+    apps.APPS[COMMANDS[cmd]]()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,72 @@
+"""The wrapper every command runs in: typed config, threads, and one-line errors instead of tracebacks."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
+from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from ..config import RunConfig, UserError
+
+
+@dataclass
+class Context:
+    """What a command gets besides its typed config."""
+
+    raw: DictConfig  # the composed config, for saving next to artifacts
+    multirun: bool
+    hydra_dir: str  # Hydra's output directory of this job (logs, .hydra/)
+
+    def config_dict(self) -> dict[str, Any]:
+        return OmegaConf.to_container(self.raw, resolve=True)  # type: ignore[return-value]
+
+
+def _error(name: str, msg: str, code: int = 1) -> None:
+    print(f"neurosym {name}: error: {msg}", file=sys.stderr)
+    raise SystemExit(code)
+
+
+def _plain_logs_off_terminal() -> None:
+    """Off a terminal (CI, pipes, cluster logs) swap rich's log handler for plain timestamped lines."""
+    import logging
+
+    from rich.logging import RichHandler
+
+    from ..utils.console import console
+
+    if console.is_terminal:
+        return
+    root = logging.getLogger()
+    for h in list(root.handlers):
+        if isinstance(h, RichHandler):
+            root.removeHandler(h)
+            plain = logging.StreamHandler(sys.stdout)
+            plain.setFormatter(logging.Formatter("[%(asctime)s] %(levelname)s %(message)s", "%H:%M:%S"))
+            root.addHandler(plain)
+
+
+def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, Context], Any]) -> Any:
+    try:
+        typed: RunConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
+    except UserError as e:
+        _error(name, str(e))
+    except OmegaConfBaseException as e:
+        _error(name, str(e).splitlines()[0])
+    _plain_logs_off_terminal()
+    hc = HydraConfig.get()
+    ctx = Context(cfg, hc.mode == RunMode.MULTIRUN, hc.runtime.output_dir)
+    import torch
+
+    if typed.threads:
+        torch.set_num_threads(typed.threads)
+    try:
+        return fn(typed, ctx)
+    except UserError as e:
+        _error(name, str(e))
+    except KeyboardInterrupt:
+        _error(name, "interrupted; artifacts written so far are intact, re-run the same command to resume", 130)

@@ -1,0 +1,65 @@
+"""`neurosym eval`: the evaluation protocol for one baseline; prints a table of every baseline evaluated so far."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from .. import __version__, artifacts
+from ..config import RunConfig
+from ..envs import make_env
+from ..evaluation import evaluate, summarize
+from ..policy import make_comm
+from ..utils.console import console, log, metrics_table
+from ..utils.device import resolve_device
+from ..utils.seeding import seed_everything
+from ._run import Context
+from .train import train_command
+
+COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
+           ("collisions", "collisions")]
+
+
+def run(cfg: RunConfig, ctx: Context) -> dict:
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    payload = artifacts.load_checkpoint(artifacts.train_dir(cfg) / "model.pt", train_command(cfg))
+    if not payload.get("done"):
+        log.warning("the model is only partly trained (step %d); evaluating it anyway; `%s` finishes it",
+                    payload["fit"]["step"], train_command(cfg))
+    policy = artifacts.policy_from_payload(payload).to(device)
+    env = make_env(cfg.task, cfg.horizon)
+    comm = make_comm(cfg.baseline.comm, cfg.rules)
+    seeds = list(range(cfg.budget.eval_seeds))
+    t0 = time.perf_counter()
+    rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
+    seconds = time.perf_counter() - t0
+    summary = summarize(rows)
+    label = artifacts.baseline_label(cfg)
+    out = artifacts.eval_dir(cfg)
+    artifacts.write_csv(out / "metrics.csv", rows)
+    artifacts.write_json(out / "metrics.json", {
+        "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
+        "seeds": len(seeds), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
+        "model": str(artifacts.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
+        "config": ctx.config_dict(),
+    })
+    log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
+    if not ctx.multirun:
+        console.print(metrics_table(f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
+                                    f"mean ± std over {len(seeds)} eval seeds", collect(Path(cfg.exp_dir)), COLUMNS))
+    return summary
+
+
+ORDER = ["tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
+         "dt-retrained", "no-comm"]
+
+
+def collect(exp_dir: Path) -> list[tuple[str, dict]]:
+    """Every baseline evaluated in an experiment directory, in the paper's order."""
+    found = []
+    for f in sorted((exp_dir / "eval").glob("*/metrics.json")):
+        m = artifacts.read_json(f)
+        found.append((m["label"], m["summary"], m["baseline"]))
+    found.sort(key=lambda t: (ORDER.index(t[2]) if t[2] in ORDER else len(ORDER), t[0]))
+    return [(label, summary) for label, summary, _ in found]

@@ -1,0 +1,100 @@
+"""`neurosym train`: train the oracle transformer (or a baseline's own model) and save a resumable checkpoint."""
+
+from __future__ import annotations
+
+import platform
+import time
+
+import torch
+
+from .. import __version__, artifacts
+from ..config import ConfigError, RunConfig
+from ..envs import make_env
+from ..policy import CommTransformer, make_comm
+from ..training import FitSpec, FitState, fit
+from ..utils.console import ProgressReporter, console, log, use_rich
+from ..utils.device import resolve_device
+from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
+from ._run import Context
+
+# config sections that must match for a checkpoint to be resumed or extended
+_COMPAT = ("task", "model", "optim")
+
+
+def train_command(cfg: RunConfig) -> str:
+    """The command line that makes the weights ``cfg``'s baseline needs."""
+    base = "tf-full" if cfg.baseline.model == "oracle" else cfg.baseline.name
+    k = f" rules={cfg.rules}" if cfg.baseline.model == "own" and cfg.baseline.comm != "none" else ""
+    return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
+
+
+def fit_spec(cfg: RunConfig) -> FitSpec:
+    o, b = cfg.optim, cfg.budget
+    return FitSpec(rollouts=b.train_rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=o.lr,
+                   lr_final=o.lr_final, grad_clip=o.grad_clip, gamma=o.gamma, detach_state=cfg.task.detach_state,
+                   checkpoint_every=b.checkpoint_every)
+
+
+def _check_compatible(saved: dict, current: dict, path) -> None:
+    for key in _COMPAT:
+        if saved.get(key) != current.get(key):
+            raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "
+                              f"or runs_root=... to train elsewhere")
+
+
+def run(cfg: RunConfig, ctx: Context) -> dict:
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
+        log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
+    env = make_env(cfg.task, cfg.horizon)
+    comm = make_comm(cfg.baseline.comm, cfg.rules)
+    spec = fit_spec(cfg)
+    out = artifacts.train_dir(cfg)
+    ckpt = out / "model.pt"
+    run_cfg = ctx.config_dict()
+    state = None
+    if ckpt.exists() and not cfg.overwrite:
+        payload = artifacts.load_checkpoint(ckpt, train_command(cfg))
+        _check_compatible(payload["config"], run_cfg, ckpt)
+        policy = artifacts.policy_from_payload(payload)
+        state = FitState(**payload["fit"])
+        if state.step >= spec.steps:
+            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
+            return {"checkpoint": str(ckpt), "steps": state.step}
+        log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
+                 state.step * spec.batch)
+    else:
+        policy = CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)
+    policy.to(device)
+
+    def save(st: FitState) -> None:
+        fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
+                    "gen_state": st.gen_state, "torch_rng": st.torch_rng}
+        payload = artifacts.policy_payload(policy, cfg.model, run_cfg, fit_dict, done=st.step >= spec.steps)
+        artifacts.save_checkpoint(ckpt, payload)
+        artifacts.write_csv(out / "history.csv", st.history)
+
+    label = f"train {cfg.task.name} {artifacts.model_name(cfg)} seed{cfg.seed}"
+    log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
+             spec.horizon, device, out)
+    t0 = time.perf_counter()
+    steps_before = state.step if state else 0
+    with ProgressReporter(label, use_rich(cfg.progress, ctx.multirun), cfg.budget.log_every) as rep:
+        state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, rep, save, state)
+    seconds = time.perf_counter() - t0
+    rollouts = (state.step - steps_before) * spec.batch
+    final = sum(h["loss"] for h in state.history[-5:]) / len(state.history[-5:])
+    artifacts.write_json(out / "manifest.json", {
+        "command": "train", "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
+        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss_last5": final,
+        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
+        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
+        "hydra_dir": ctx.hydra_dir, "config": run_cfg,
+    })
+    console.print(f"[green]trained[/] {label}: loss {final:.3f} (mean of last 5 steps), "
+                  f"{rollouts} rollouts in {seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
+    return {"checkpoint": str(ckpt), "steps": state.step, "loss": final}
+
+
+

@@ -1,0 +1,218 @@
+"""Typed configuration schemas (stdlib only, no torch).
+
+Hydra composes the YAML values in ``conf/``; ``commands/_hydra.py`` registers these dataclasses as the
+schemas of the primary configs, so a typo or a wrongly typed override fails at compose time, and
+``OmegaConf.to_object`` hands the layers below a plain typed object whose ``__post_init__`` checks ranges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
+
+
+class UserError(Exception):
+    """Bad input from the user (config, missing or corrupt artifact): reported as one line, no traceback."""
+
+
+class ConfigError(UserError, ValueError):
+    """A configuration value is out of range; the message names the key and the fix."""
+
+
+def _check(ok: bool, msg: str) -> None:
+    if not ok:
+        raise ConfigError(msg)
+
+
+@dataclass
+class TaskConfig:
+    """One task: the environment family plus its constants (decisions.md, 'Environments')."""
+
+    name: str = MISSING
+    """task name as used on the command line (random-cross, random-grid, ...)"""
+    kind: str = "formation"
+    """formation (cross / grid / two-groups) or unlabeled"""
+    layout: str = "cross"
+    """formation layout: cross, grid (ignored by unlabeled)"""
+    num_groups: int = 4
+    """cross: number of possible groups (4 = paper random-cross, 2 = two-groups-cross)"""
+    agents_per_group: int = 10
+    """agents in each group (formation) or agents and goals (unlabeled)"""
+    group_prob: float = 0.33
+    """cross: probability that each non-guaranteed group is present (paper section 4)"""
+    ell: float = 7.0
+    """world units: distance from the origin to the group box centres (paper's l)"""
+    box_half_width: float = 1.25
+    """world units: half-width of the start and goal boxes"""
+    min_separation: float = 0.5
+    """world units: minimum distance between sampled start (and goal) points"""
+    horizon: int = 200
+    """T: steps per episode"""
+    rounds: int = 1
+    """communication rounds per step (unlabeled-goals: 2, paper appendix A)"""
+    dt: float = 0.1
+    """seconds per step"""
+    v_max: float = 2.0
+    """world units per second: the speed is clipped to this norm"""
+    noise_std: float = 0.05
+    """world units: std of the Gaussian noise on relative observations o_ij"""
+    collision_weight: float = 5.0
+    """p_c: within-group collision penalty weight"""
+    collision_dist: float = 0.1
+    """d_c, world units: within-group collision distance (ramp is zero beyond 2 d_c)"""
+    collision_inter_group_weight: float = 25.0
+    """reference code's across-group ramp weight (0 disables it; paper is silent)"""
+    collision_inter_group_dist: float = 2.0
+    """world units: across-group ramp distance"""
+    start_half_width: float = 2.0
+    """unlabeled: starts are drawn in [-w, w]^2"""
+    goal_half_width: float = 8.0
+    """unlabeled: goals are drawn in [-w, w]^2"""
+    start_separation: float = 1.0
+    """unlabeled: minimum separation between starts"""
+    goal_separation: float = 2.0
+    """unlabeled: minimum separation between goals"""
+    velocity: str = "paper"
+    """unlabeled velocity law: paper (sum_k p_k (g_k - x)) or reference (v_max * sum_k p_k unit(g_k - x))"""
+    detach_state: bool = False
+    """cut gradients through the state between steps (reference does so for unlabeled)"""
+    rules: int = 2
+    """the paper's K for this task (cross 5, grid 2, unlabeled 5); the default of the top-level ``rules``"""
+    lam: float = 0.5
+    """the paper's lambda-tilde for this task (cross 0.5, grid 0.5, unlabeled 0.7)"""
+    eval_episodes: int = 5
+    """episodes per evaluation seed when the task has no fixed test settings"""
+    test_settings: list[str] = field(default_factory=list)
+    """fixed evaluation settings (one episode each per seed); empty = eval_episodes random episodes"""
+
+    def __post_init__(self) -> None:
+        _check(self.kind in ("formation", "unlabeled"), f"task.kind must be formation or unlabeled, got {self.kind!r}")
+        _check(self.layout in ("cross", "grid"), f"task.layout must be cross or grid, got {self.layout!r}")
+        _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
+        _check(self.rounds in (1, 2), f"task.rounds must be 1 or 2, got {self.rounds}")
+        _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
+        _check(0.0 <= self.group_prob <= 1.0, "task.group_prob must lie in [0, 1]")
+        _check(self.noise_std >= 0.0, "task.noise_std must be non-negative")
+        _check(self.velocity in ("paper", "reference"), "task.velocity must be paper or reference")
+        _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
+
+
+@dataclass
+class ModelConfig:
+    """The transformer of paper section 3.1 (reference widths, decisions.md 'Policy')."""
+
+    width: int = 16
+    """d: embedding, query, key and message width"""
+    ffn: int = 16
+    """hidden width of the post-attention feed-forward block"""
+    dropout: float = 0.1
+    """dropout on attention weights and residual branches during training"""
+
+    def __post_init__(self) -> None:
+        _check(self.width > 0 and self.ffn > 0, "model.width and model.ffn must be positive")
+        _check(0.0 <= self.dropout < 1.0, "model.dropout must lie in [0, 1)")
+
+
+@dataclass
+class OptimConfig:
+    """Batched BPTT optimisation (decisions.md 'Training': chosen by what trains best)."""
+
+    lr: float = 3e-3
+    """Adam learning rate"""
+    lr_final: float = 3e-4
+    """learning rate at the end of the budget (cosine decay); equal to lr for a constant rate"""
+    grad_clip: float = 1.0
+    """max global gradient norm"""
+    gamma: float = 1.0
+    """discount of the per-step loss (reference 1.0; paper says < 1)"""
+
+    def __post_init__(self) -> None:
+        _check(self.lr > 0 and self.lr_final > 0, "optim.lr and optim.lr_final must be positive")
+        _check(self.grad_clip > 0, "optim.grad_clip must be positive")
+        _check(0.0 < self.gamma <= 1.0, "optim.gamma must lie in (0, 1]")
+
+
+@dataclass
+class BudgetConfig:
+    """How much work each stage does. Counted in rollouts, as in the paper (section 4)."""
+
+    name: str = MISSING
+    train_rollouts: int = 10_000
+    """rollouts used to train the oracle (and the dist / no-comm models)"""
+    batch_rollouts: int = 100
+    """rollouts per optimizer step"""
+    eval_seeds: int = 20
+    """evaluation seeds; every seed re-seeds everything"""
+    horizon: Optional[int] = None
+    """override of the task horizon (tiny budgets only); null keeps the task's"""
+    checkpoint_every: int = 10
+    """optimizer steps between checkpoints (an interrupted run resumes from the last one)"""
+    log_every: int = 5
+    """optimizer steps between plain log lines (non-terminal output)"""
+
+    def __post_init__(self) -> None:
+        _check(self.train_rollouts > 0, f"budget.train_rollouts must be positive, got {self.train_rollouts}")
+        _check(self.batch_rollouts > 0, f"budget.batch_rollouts must be positive, got {self.batch_rollouts}")
+        _check(self.eval_seeds > 0, f"budget.eval_seeds must be positive, got {self.eval_seeds}")
+        _check(self.horizon is None or self.horizon > 0, "budget.horizon must be positive or null")
+        _check(self.checkpoint_every > 0 and self.log_every > 0, "budget.checkpoint_every/log_every must be positive")
+
+
+@dataclass
+class BaselineConfig:
+    """A baseline = which model is used and who decides the communication mask (paper section 4)."""
+
+    name: str = MISSING
+    comm: str = "full"
+    """communication provider: full, topk (hard-attn), nearest (dist), none (no-comm)"""
+    model: str = "oracle"
+    """which trained weights: oracle (shared by tf-full / hard-attn), or own (trained with this mask)"""
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        _check(self.comm in ("full", "topk", "nearest", "none"), f"baseline.comm: unknown provider {self.comm!r}")
+        _check(self.model in ("oracle", "own"), f"baseline.model must be oracle or own, got {self.model!r}")
+
+
+@dataclass
+class RunConfig:
+    """Fields shared by every command (conf/_common_.yaml)."""
+
+    cmd: str = MISSING
+    seed: int = 0
+    """training seed: fixes numpy, torch, env sampling and dropout"""
+    rules: int = 2
+    """K: number of program rules, also k of hard-attn and dist (paper section 4: K = d0)"""
+    lam: float = 0.5
+    """paper's lambda-tilde: weight of the degree term in the synthesis objective"""
+    device: str = "auto"
+    """auto (GPU when present), cpu, cuda"""
+    threads: int = 0
+    """torch CPU threads; 0 keeps torch's default"""
+    runs_root: str = "outputs"
+    exp_dir: str = MISSING
+    """stable artifact directory of this (task, budget, seed); later stages find upstream files here"""
+    overwrite: bool = False
+    """start over instead of resuming from an existing checkpoint"""
+    progress: str = "auto"
+    """auto (rich bar on a terminal, log lines otherwise), rich, plain"""
+    task: TaskConfig = field(default_factory=TaskConfig)
+    model: ModelConfig = field(default_factory=ModelConfig)
+    optim: OptimConfig = field(default_factory=OptimConfig)
+    budget: BudgetConfig = field(default_factory=BudgetConfig)
+    baseline: BaselineConfig = field(default_factory=BaselineConfig)
+
+    def __post_init__(self) -> None:
+        _check(self.rules > 0, f"rules must be positive, got {self.rules}")
+        _check(self.lam >= 0, f"lam must be non-negative, got {self.lam}")
+        _check(self.device in ("auto", "cpu", "cuda") or self.device.startswith("cuda:"),
+               f"device must be auto, cpu or cuda, got {self.device!r}")
+        _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
+        _check(self.threads >= 0, "threads must be non-negative")
+
+    @property
+    def horizon(self) -> int:
+        """Steps per episode for this run (budget override, else the task's)."""
+        return self.budget.horizon or self.task.horizon

@@ -1,0 +1,63 @@
+"""The evaluation protocol (paper section 4, decisions.md 'Evaluation').
+
+Every evaluation seed re-seeds everything: its episodes (the task's fixed test settings, or random episodes)
+and their observation noise come from generators derived from the seed alone, so all baselines face the same
+episodes, and a seed's numbers do not depend on which other seeds ran beside it. Episodes of all seeds are
+batched together, bucketed by agent count.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import torch
+
+from .envs.base import MultiAgentEnv, Rng, group_by_agents
+from .policy.comm import CommProvider
+from .policy.transformer import CommTransformer
+from .rollout import METRICS, rollout
+from .utils.seeding import STREAM_EVAL, generator
+
+
+def evaluate(
+    env: MultiAgentEnv,
+    policy: CommTransformer,
+    comm: CommProvider,
+    seeds: Sequence[int],
+    device: torch.device,
+    detach_state: bool = False,
+) -> list[dict[str, float]]:
+    """One row per seed: the mean over that seed's episodes of each per-episode metric (time averages)."""
+    states, keys = [], []
+    for s in seeds:
+        eps, gens = env.test_episodes(lambda k, s=s: generator(s, STREAM_EVAL, k))
+        states += eps
+        keys += [(s, g) for g in gens]
+    sums = {s: {m: 0.0 for m in METRICS} for s in seeds}
+    counts = {s: 0 for s in seeds}
+    was_training = policy.training
+    policy.eval()
+    with torch.no_grad():
+        for bucket, bkeys in group_by_agents(states, keys):
+            rng = Rng([g for _, g in bkeys], device)
+            traj = rollout(env, policy, comm, bucket.to(device), rng, env.horizon, detach_state)
+            per_ep = traj.episode_metrics()
+            for e, (s, _) in enumerate(bkeys):
+                counts[s] += 1
+                for m in METRICS:
+                    sums[s][m] += float(per_ep[m][e])
+    policy.train(was_training)
+    return [{"seed": s, "episodes": counts[s], **{m: sums[s][m] / counts[s] for m in METRICS}} for s in seeds]
+
+
+def summarize(rows: Sequence[dict[str, float]]) -> dict[str, dict[str, float]]:
+    """Mean, sample std (ddof 1) and a 95% normal interval half-width over seeds, per metric."""
+    out = {}
+    n = len(rows)
+    for m in METRICS:
+        vals = [r[m] for r in rows]
+        mean = sum(vals) / n
+        std = math.sqrt(sum((v - mean) ** 2 for v in vals) / (n - 1)) if n > 1 else 0.0
+        out[m] = {"mean": mean, "std": std, "ci95": 1.96 * std / math.sqrt(n), "n": n}
+    return out

@@ -1,0 +1,104 @@
+"""Communication providers: every baseline of the paper is a rule that hands the transformer a mask.
+
+A provider answers, for each round, which agents j each agent i hears: a (B, N, N) bool mask, self excluded.
+The same transformer then attends over the selected agents only (paper section 3.3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import torch
+from torch import Tensor
+
+from ..config import ConfigError
+from ..envs.base import EnvState, MultiAgentEnv, Observation, Rng, eye_mask
+
+
+@dataclass
+class CommContext:
+    """What a provider may look at during one step of a bucket."""
+
+    env: MultiAgentEnv
+    state: EnvState
+    obs: Observation
+    rng: Rng
+
+
+class CommProvider(Protocol):
+    name: str
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        """logits: (B, N, N) the transformer's attention logits of this round -> (B, N, N) bool mask."""
+        ...
+
+
+def _others(logits: Tensor) -> Tensor:
+    b, n, _ = logits.shape
+    return ~eye_mask(n, logits.device).expand(b, n, n)
+
+
+def _topk_mask(score: Tensor, k: int) -> Tensor:
+    """(B, N, N) bool: the k highest scores of each row (self must already score -inf)."""
+    n = score.shape[-1]
+    k = min(k, n - 1)
+    mask = torch.zeros_like(score, dtype=torch.bool)
+    if k <= 0:
+        return mask
+    return mask.scatter(-1, score.topk(k, dim=-1).indices, True)
+
+
+class FullComm:
+    """tf-full: every agent hears every other agent (soft attention)."""
+
+    name = "full"
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return _others(logits)
+
+
+class NoComm:
+    """no-comm: nobody hears anybody; each agent acts on its own state."""
+
+    name = "none"
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return torch.zeros_like(logits, dtype=torch.bool)
+
+
+class TopKComm:
+    """hard-attn: each agent hears the k others with the largest attention logits (in-degree k, every round)."""
+
+    name = "topk"
+
+    def __init__(self, k: int):
+        self.k = k
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return _topk_mask(logits.masked_fill(~_others(logits), float("-inf")), self.k)
+
+
+class NearestComm:
+    """dist: each agent hears its k nearest neighbours (noise-free distances, as the reference)."""
+
+    name = "nearest"
+
+    def __init__(self, k: int):
+        self.k = k
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return _topk_mask(-ctx.env.true_distance(ctx.state), self.k)
+
+
+def make_comm(kind: str, k: int) -> CommProvider:
+    """Provider by name (``baseline.comm``); k = rules for the degree-limited ones."""
+    if kind == "full":
+        return FullComm()
+    if kind == "none":
+        return NoComm()
+    if kind == "topk":
+        return TopKComm(k)
+    if kind == "nearest":
+        return NearestComm(k)
+    raise ConfigError(f"unknown communication provider {kind!r}; known: full, none, topk, nearest")

@@ -1,0 +1,70 @@
+"""One batched rollout of a policy under a communication provider: shared by train, retrain and eval."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor
+
+from .envs.base import EnvState, MultiAgentEnv, Rng
+from .policy.comm import CommContext, CommProvider
+from .policy.transformer import CommTransformer
+
+
+@dataclass
+class Trajectory:
+    """Per-step records of a bucket (T steps, B episodes)."""
+
+    cost: Tensor  # (T, B) loss of each step, summed over agents; differentiable when rolled out with grad
+    max_in: Tensor  # (T, B) max over agents of the in-degree (agents heard), mean over rounds
+    max_out: Tensor  # (T, B) max over agents of the out-degree (agents that hear it), mean over rounds
+    max_degree: Tensor  # (T, B) max over agents of in + out (the paper's deg, section 2)
+    mean_degree: Tensor  # (T, B) mean over agents of in + out
+    collisions: Tensor  # (T, B) unordered pairs closer than the collision distance
+
+    def episode_metrics(self) -> dict[str, Tensor]:
+        """(B,) time averages: the per-episode metrics of the evaluation protocol (decisions.md)."""
+        return {k: getattr(self, k).detach().float().mean(0) for k in METRICS}
+
+
+METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree", "collisions")
+
+
+def degree_stats(masks: list[Tensor]) -> tuple[Tensor, Tensor, Tensor, Tensor]:
+    """masks: per round (B, N, N) bool (i hears j) -> (max_in, max_out, max_deg, mean_deg), each (B,)."""
+    out = torch.zeros(4, masks[0].shape[0], device=masks[0].device)
+    for m in masks:
+        m = m.float()
+        deg_in, deg_out = m.sum(2), m.sum(1)  # (B, N): row sums = heard by i; column sums = hearing j
+        deg = deg_in + deg_out
+        out += torch.stack([deg_in.amax(1), deg_out.amax(1), deg.amax(1), deg.mean(1)])
+    out /= len(masks)
+    return out[0], out[1], out[2], out[3]
+
+
+def rollout(
+    env: MultiAgentEnv,
+    policy: CommTransformer,
+    comm: CommProvider,
+    state: EnvState,
+    rng: Rng,
+    horizon: int,
+    detach_state: bool = False,
+) -> Trajectory:
+    """Run ``horizon`` steps from ``state``. Gradients flow through the dynamics unless torch.no_grad is active
+    or ``detach_state`` cuts them between steps."""
+    costs, stats, cols = [], [], []
+    for _ in range(horizon):
+        if detach_state:
+            state = state.detach()
+        obs = env.observe(state, rng)
+        ctx = CommContext(env, state, obs, rng)
+        out = policy(obs, lambda logits, r: comm.select(ctx, logits, r))
+        state = env.step(state, out.action)
+        costs.append(env.cost(state, out.action))
+        with torch.no_grad():
+            stats.append(torch.stack(degree_stats(out.masks)))
+            cols.append(env.collisions(state))
+    s = torch.stack(stats)  # (T, 4, B)
+    return Trajectory(torch.stack(costs), s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols))

@@ -1,0 +1,112 @@
+"""The single training loop (paper section 3.1; retraining, section 3.5, is the same loop with another provider).
+
+Model-based RL by backpropagation through the differentiable dynamics: each optimizer step rolls out a batch of
+episodes, sums their (discounted) per-step losses, and backpropagates through the whole horizon. The budget is
+counted in rollouts, like the paper's "10k rollouts".
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Protocol
+
+import torch
+
+from .envs.base import MultiAgentEnv, Rng
+from .policy.comm import CommProvider
+from .policy.transformer import CommTransformer
+from .rollout import rollout
+
+
+@dataclass
+class FitSpec:
+    rollouts: int  # total training rollouts
+    batch: int  # rollouts per optimizer step
+    horizon: int  # T
+    lr: float = 3e-3
+    lr_final: float = 3e-4
+    grad_clip: float = 1.0
+    gamma: float = 1.0
+    detach_state: bool = False
+    checkpoint_every: int = 10
+
+    @property
+    def steps(self) -> int:
+        return math.ceil(self.rollouts / self.batch)
+
+    def lr_at(self, step: int) -> float:
+        """Cosine decay from lr to lr_final over the budget."""
+        frac = step / max(self.steps - 1, 1)
+        return self.lr_final + 0.5 * (self.lr - self.lr_final) * (1 + math.cos(math.pi * frac))
+
+
+@dataclass
+class FitState:
+    """Everything needed to resume: stored in the checkpoint (tensors and plain data only)."""
+
+    step: int = 0
+    history: list[dict[str, float]] = field(default_factory=list)
+    optimizer: dict | None = None
+    gen_state: torch.Tensor | None = None
+    torch_rng: torch.Tensor | None = None
+
+
+class Reporter(Protocol):
+    def update(self, step: int, total: int, metrics: dict[str, float]) -> None: ...
+
+
+def fit(
+    policy: CommTransformer,
+    env: MultiAgentEnv,
+    comm: CommProvider,
+    spec: FitSpec,
+    gen: torch.Generator,
+    device: torch.device,
+    reporter: Reporter,
+    save: Callable[[FitState], None],
+    state: FitState | None = None,
+) -> FitState:
+    """Train ``policy`` in place under ``comm``; ``save`` is called every ``checkpoint_every`` steps and at the end."""
+    state = state or FitState()
+    opt = torch.optim.Adam(policy.parameters(), lr=spec.lr)
+    if state.optimizer is not None:
+        opt.load_state_dict(state.optimizer)
+    if state.gen_state is not None:
+        gen.set_state(state.gen_state)
+    if state.torch_rng is not None:
+        torch.set_rng_state(state.torch_rng)
+    policy.train()
+    discount = spec.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
+    rng = Rng(gen, device)
+    while state.step < spec.steps:
+        t0 = time.perf_counter()
+        batch = min(spec.batch, spec.rollouts - state.step * spec.batch)
+        for group in opt.param_groups:
+            group["lr"] = spec.lr_at(state.step)
+        opt.zero_grad(set_to_none=True)
+        # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory
+        total_cost, n_eps = 0.0, 0
+        for bucket in env.reset(batch, gen):
+            traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state)
+            loss = (traj.cost * discount[:, None]).sum() / (batch * spec.horizon)
+            loss.backward()
+            total_cost += float(traj.cost.detach().mean(0).sum())
+            n_eps += bucket.batch
+        # CLIP -> STEP
+        grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
+        opt.step()
+        state.step += 1
+        # LOG
+        metrics = {"step": state.step, "rollouts": min(state.step * spec.batch, spec.rollouts),
+                   "loss": total_cost / n_eps, "grad_norm": grad_norm, "lr": spec.lr_at(state.step - 1),
+                   "seconds": time.perf_counter() - t0}
+        state.history.append(metrics)
+        reporter.update(state.step, spec.steps, metrics)
+        if state.step % spec.checkpoint_every == 0 or state.step == spec.steps:
+            state.optimizer = opt.state_dict()
+            state.gen_state = gen.get_state()
+            state.torch_rng = torch.get_rng_state()
+            save(state)
+    return state
