@@ -1,0 +1,21 @@
+import os
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+ROOT = Path(__file__).resolve().parents[1]
+
+torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+
+
+@pytest.fixture
+def gen():
+    return torch.Generator().manual_seed(0)
+
+
+def neurosym_cmd():
+    """How to invoke the CLI in a subprocess: the installed script, else the module."""
+    exe = Path(sys.executable).parent / "neurosym"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "neurosym_cli.cli"]

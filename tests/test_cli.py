@@ -1,0 +1,139 @@
+"""The CLI as a user runs it, in subprocesses, on the tiny budget."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, neurosym_cmd
+
+
+def run(args, tmp_path, check=True, timeout=300):
+    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path), "OMP_NUM_THREADS": "2"}
+    p = subprocess.run([*neurosym_cmd(), *args], cwd=tmp_path, env=env, capture_output=True, text=True,
+                       timeout=timeout)
+    if check and p.returncode != 0:
+        raise AssertionError(f"exit {p.returncode}\nstdout:\n{p.stdout}\nstderr:\n{p.stderr}")
+    return p
+
+
+def test_help_lists_commands_without_importing_torch():
+    code = ("import sys; sys.argv=['neurosym','--help']; from neurosym_cli.cli import main; main(); "
+            "assert 'torch' not in sys.modules, 'torch imported'")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    for cmd in ("train", "eval", "synth", "retrain", "show-program"):
+        assert cmd in p.stdout
+
+
+def test_train_then_eval_tiny(tmp_path):
+    run(["train", "task=random-cross", "budget=tiny"], tmp_path)
+    exp = tmp_path / "random-cross" / "tiny" / "seed0"
+    assert (exp / "train" / "oracle" / "model.pt").exists()
+    assert len((exp / "train" / "oracle" / "history.csv").read_text().splitlines()) == 3  # header + 2 steps
+    for baseline in ("tf-full", "hard-attn"):
+        p = run(["eval", "task=random-cross", f"baseline={baseline}", "budget=tiny"], tmp_path)
+        assert "tf-full" in p.stdout
+    m = json.loads((exp / "eval" / "hard-attn-k5" / "metrics.json").read_text())
+    assert m["seeds"] == 2 and m["episodes_per_seed"] == 6
+    assert m["summary"]["max_in"]["mean"] == pytest.approx(5.0)
+    rows = (exp / "eval" / "hard-attn-k5" / "metrics.csv").read_text().splitlines()
+    assert rows[0].startswith("seed,episodes,cost") and len(rows) == 3
+    # eval is reproducible: same seeds, same numbers
+    run(["eval", "task=random-cross", "baseline=hard-attn", "budget=tiny"], tmp_path)
+    again = json.loads((exp / "eval" / "hard-attn-k5" / "metrics.json").read_text())
+    assert again["per_seed"] == m["per_seed"]
+
+
+def test_own_model_baselines_and_unlabeled(tmp_path):
+    run(["train", "task=unlabeled-goals", "baseline=dist", "budget=tiny"], tmp_path)
+    run(["eval", "task=unlabeled-goals", "baseline=dist", "budget=tiny"], tmp_path)
+    m = json.loads((tmp_path / "unlabeled-goals/tiny/seed0/eval/dist-k5/metrics.json").read_text())
+    assert m["summary"]["max_in"]["mean"] == pytest.approx(5.0)
+    assert 0 <= m["summary"]["cost"]["mean"] <= 10
+
+
+def test_resume_extend_and_already_done(tmp_path):
+    run(["train", "task=two-groups-cross", "budget=tiny"], tmp_path)
+    p = run(["train", "task=two-groups-cross", "budget=tiny"], tmp_path)
+    assert "already trained" in p.stdout
+    p = run(["train", "task=two-groups-cross", "budget=tiny", "budget.train_rollouts=16"], tmp_path)
+    assert "resuming" in p.stdout and "step 2/4" in p.stdout
+    hist = (tmp_path / "two-groups-cross/tiny/seed0/train/oracle/history.csv").read_text().splitlines()
+    assert len(hist) == 5
+    p = run(["train", "task=two-groups-cross", "budget=tiny", "model.width=8"], tmp_path, check=False)
+    assert p.returncode != 0 and "different `model` config" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_interrupted_train_resumes(tmp_path):
+    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path)}
+    args = [*neurosym_cmd(), "train", "task=two-groups-cross", "budget=tiny", "budget.train_rollouts=4000"]
+    proc = subprocess.Popen(args, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ckpt = tmp_path / "two-groups-cross/tiny/seed0/train/oracle/model.pt"
+    deadline = time.time() + 120
+    while not ckpt.exists() and time.time() < deadline:
+        time.sleep(0.2)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0 and "re-run the same command to resume" in err, err
+    # the same command again picks up from the checkpoint (stopped as soon as it says so)
+    proc = subprocess.Popen(args, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    first = proc.stdout.readline()
+    proc.kill()
+    proc.communicate()
+    assert "resuming" in first and "from step" in first, first
+
+
+def test_multirun_two_seeds(tmp_path):
+    run(["train", "-m", "seed=0,1", "budget=tiny", "task=two-groups-cross"], tmp_path)
+    for s in (0, 1):
+        assert (tmp_path / f"two-groups-cross/tiny/seed{s}/train/oracle/model.pt").exists()
+    a = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
+    b = json.loads((tmp_path / "two-groups-cross/tiny/seed1/train/oracle/manifest.json").read_text())
+    assert a["final_loss_last5"] != b["final_loss_last5"]
+
+
+def test_joblib_launcher_sweep(tmp_path):
+    run(["train", "-m", "seed=0,1", "budget=tiny", "task=two-groups-cross", "hydra/launcher=joblib",
+         "hydra.launcher.n_jobs=2"], tmp_path)
+    for s in (0, 1):
+        assert (tmp_path / f"two-groups-cross/tiny/seed{s}/train/oracle/model.pt").exists()
+
+
+def test_same_seed_same_model(tmp_path):
+    import torch
+
+    run(["train", "budget=tiny", "task=two-groups-cross", "runs_root=" + str(tmp_path / "a")], tmp_path)
+    run(["train", "budget=tiny", "task=two-groups-cross", "runs_root=" + str(tmp_path / "b")], tmp_path)
+    load = lambda r: torch.load(tmp_path / r / "two-groups-cross/tiny/seed0/train/oracle/model.pt", weights_only=True)
+    a, b = load("a"), load("b")
+    assert all(torch.equal(a["state_dict"][k], b["state_dict"][k]) for k in a["state_dict"])
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["train", "task=nope", "budget=tiny"], "nope"),
+    (["train", "baseline=nope", "budget=tiny"], "nope"),
+    (["train", "budget=tiny", "budget.train_rollouts=-3"], "train_rollouts must be positive"),
+    (["train", "budget=tiny", "budget.train_rollouts=abc"], "train_rollouts"),
+    (["eval", "budget=tiny", "baseline=dist"], "neurosym train task=random-cross baseline=dist"),
+    (["frobnicate"], "unknown command"),
+])
+def test_bad_input_is_one_clear_error(tmp_path, args, needle):
+    p = run(args, tmp_path, check=False)
+    assert p.returncode != 0
+    assert needle in p.stderr
+    assert "Traceback" not in p.stderr + p.stdout
+
+
+def test_corrupt_checkpoint_is_reported(tmp_path):
+    ckpt = tmp_path / "random-cross/tiny/seed0/train/oracle/model.pt"
+    ckpt.parent.mkdir(parents=True)
+    ckpt.write_bytes(b"not a checkpoint")
+    p = run(["eval", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0 and "corrupt checkpoint" in p.stderr and "Traceback" not in p.stderr

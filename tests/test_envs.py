@@ -1,0 +1,148 @@
+"""Environments: shapes, determinism, hand-computed costs, the grid constraint, gradients through dynamics."""
+
+import math
+
+import pytest
+import torch
+
+from neurosym_cli.config import TaskConfig
+from neurosym_cli.envs import EnvState, FormationEnv, Rng, UnlabeledGoalsEnv, make_env
+
+CROSS = TaskConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
+GRID = TaskConfig(name="random-grid", layout="grid", ell=14.0, num_groups=3)
+UNLAB = TaskConfig(name="unlabeled-goals", kind="unlabeled", horizon=100, rounds=2, collision_weight=0.0,
+                   collision_inter_group_weight=0.0)
+
+
+def test_cross_reset_buckets_by_agent_count(gen):
+    env = make_env(CROSS)
+    buckets = env.reset(64, gen)
+    assert sum(b.batch for b in buckets) == 64
+    ns = [b.n_agents for b in buckets]
+    assert ns == sorted(set(ns)) and set(ns) <= {10, 20, 30, 40}
+    for b in buckets:
+        assert b.pos.shape == (b.batch, b.n_agents, 2) and b.goal.shape == b.pos.shape
+        assert b.group.shape == (b.batch, b.n_agents)
+
+
+def test_reset_is_deterministic_given_the_generator():
+    env = make_env(CROSS)
+    a = env.reset(16, torch.Generator().manual_seed(3))
+    b = env.reset(16, torch.Generator().manual_seed(3))
+    c = env.reset(16, torch.Generator().manual_seed(4))
+    assert all(torch.equal(x.pos, y.pos) and torch.equal(x.goal, y.goal) for x, y in zip(a, b))
+    assert not all(x.pos.shape == y.pos.shape and torch.equal(x.pos, y.pos) for x, y in zip(a, c))
+
+
+def test_cross_boxes_and_separation(gen):
+    env = make_env(CROSS)
+    s = env.setting("0-1-2-3", gen)
+    centres = {0: (-7, 0), 1: (0, -7), 2: (7, 0), 3: (0, 7)}
+    for g, (cx, cy) in centres.items():
+        pts = s.pos[0, s.group[0] == g]
+        goals = s.goal[0, s.group[0] == g]
+        assert pts.shape == (10, 2)
+        assert (pts - torch.tensor([cx, cy])).abs().max() <= 1.25 + 1e-6
+        assert (goals + torch.tensor([cx, cy])).abs().max() <= 1.25 + 1e-6  # goal box opposite the start box
+        d = torch.cdist(pts, pts) + torch.eye(10) * 10
+        assert d.min() >= 0.5 - 1e-6
+
+
+def test_grid_goal_boxes_adjacent_and_distinct(gen):
+    env = make_env(GRID)
+    s = env.reset(500, gen)[0]
+    l = 14.0
+    starts = torch.tensor([[-l, 0.0], [l, 0.0], [0.0, 0.0]])
+    centre = lambda x: torch.round(x.reshape(500, 3, 10, 2).mean(2) / l) * l  # (B, 3, 2) box centres
+    goal_c = centre(s.goal)
+    assert torch.equal(centre(s.pos), starts.expand(500, 3, 2))
+    # adjacent: exactly one grid step away from the start box (Manhattan distance l)
+    assert torch.allclose((goal_c - starts).abs().sum(-1), torch.full((500, 3), l))
+    # distinct goal boxes
+    for i, j in [(0, 1), (0, 2), (1, 2)]:
+        assert ((goal_c[:, i] - goal_c[:, j]).abs().sum(-1) > 0).all()
+    # every one of the 16 allowed combinations occurs
+    combos = {tuple(map(float, g.flatten())) for g in goal_c}
+    assert len(combos) == 16
+
+
+def test_formation_cost_matches_hand_computation():
+    cfg = TaskConfig(name="t", num_groups=2)
+    env = FormationEnv(cfg)
+    pos = torch.tensor([[[0.0, 0.0], [0.05, 0.0], [3.0, 0.0]]])
+    goal = torch.tensor([[[1.0, 0.0], [0.05, 2.0], [3.0, 4.0]]])
+    group = torch.tensor([[0, 0, 1]])
+    s = EnvState(pos, goal, group)
+    dist = 1.0 + 2.0 + 4.0
+    within = max(0.0, 5 * (2 - 0.05 / 0.1))  # agents 0, 1: 7.5
+    across = max(0.0, 25 * (2 - 3.0 / 2.0)) + max(0.0, 25 * (2 - 2.95 / 2.0))  # (0, 2) and (1, 2)
+    got = env.cost(s, torch.zeros(1, 3, 2))
+    assert got.shape == (1,)
+    assert math.isclose(float(got), dist + within + across, rel_tol=1e-5)
+    assert float(env.collisions(s)) == 1.0  # the pair (0, 1) is closer than d_c
+    cfg_off = TaskConfig(name="t", num_groups=2, collision_inter_group_weight=0.0)
+    assert math.isclose(float(FormationEnv(cfg_off).cost(s, torch.zeros(1, 3, 2))), dist + within, rel_tol=1e-5)
+
+
+def test_speed_is_clipped_and_step_integrates():
+    env = FormationEnv(TaskConfig(name="t"))
+    s = EnvState(torch.zeros(1, 2, 2), torch.ones(1, 2, 2), torch.zeros(1, 2, dtype=torch.long))
+    nxt = env.step(s, torch.tensor([[[30.0, 40.0], [0.5, 0.0]]]))
+    assert torch.allclose(nxt.pos[0, 0], torch.tensor([0.12, 0.16]), atol=1e-5)  # speed 50 -> 2, times dt 0.1
+    assert torch.allclose(nxt.pos[0, 1], torch.tensor([0.05, 0.0]), atol=1e-5)
+
+
+def test_observation_is_relative_and_noisy(gen):
+    env = make_env(CROSS)
+    s = env.setting("0", gen)
+    clean = make_env(TaskConfig(name="c", noise_std=0.0)).observe(s, Rng(gen))
+    assert torch.allclose(clean.rel[0, 2, 5], s.pos[0, 5] - s.pos[0, 2])  # o_ij = x_j - x_i
+    assert torch.allclose(clean.agent, s.pos - s.goal)
+    noisy = env.observe(s, Rng(gen))
+    err = noisy.rel - clean.rel
+    assert 0.03 < float(err.std()) < 0.07
+
+
+def test_gradients_flow_through_the_dynamics(gen):
+    env = make_env(CROSS)
+    s = env.setting("0-2", gen)
+    actions = torch.zeros(5, 1, 20, 2, requires_grad=True)
+    total = 0.0
+    for t in range(5):
+        s = env.step(s, actions[t])
+        total = total + env.cost(s, actions[t]).sum()
+    total.backward()
+    g = actions.grad
+    assert torch.isfinite(g).all()
+    assert (g[0].abs().sum() > 0) and (g[-1].abs().sum() > 0)
+    # an early action influences every later cost: its gradient is larger than the last action's
+    assert g[0].abs().sum() > g[-1].abs().sum()
+
+
+def test_unlabeled_shapes_cost_and_ordering(gen):
+    env = UnlabeledGoalsEnv(UNLAB)
+    s = env.reset(3, gen)[0]
+    assert s.pos.shape == (3, 10, 2) and s.goal.shape == (3, 10, 2) and s.goal_order.shape == (3, 10, 10)
+    obs = env.observe(s, Rng(gen))
+    assert obs.agent.shape == (3, 10, 22) and obs.rel.shape == (3, 10, 10, 2)
+    # the first goal offset is the nearest goal
+    off = obs.agent[..., 2:].reshape(3, 10, 10, 2).norm(dim=-1)
+    assert torch.all(off[..., 0] <= off.min(-1).values + 1e-6)
+    # every agent puts all weight on its own nearest goal: uncovered = N - number of distinct nearest goals
+    logits = torch.full((3, 10, 10), -30.0)
+    logits[..., 0] = 30.0
+    nearest = s.goal_order[..., 0]
+    expected = torch.tensor([10 - len(set(n.tolist())) for n in nearest], dtype=torch.float32)
+    assert torch.allclose(env.cost(s, logits), expected, atol=1e-4)
+    # and it moves towards that goal
+    nxt = env.step(s, logits)
+    g = torch.gather(s.goal, 1, nearest[..., None].expand(-1, -1, 2))
+    assert ((nxt.pos - g).norm(dim=-1) < (s.pos - g).norm(dim=-1)).all()
+
+
+@pytest.mark.parametrize("bad", ["0-7", "x", ""])
+def test_bad_cross_setting_is_a_config_error(bad, gen):
+    from neurosym_cli.config import ConfigError
+
+    with pytest.raises(ConfigError):
+        make_env(CROSS).setting(bad, gen)
