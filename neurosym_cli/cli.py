@@ -63,6 +63,33 @@ def hoist_flags(args: list[str]) -> list[str]:
     return flags + rest
 
 
+def _conf_dir():
+    from importlib.util import find_spec
+    from pathlib import Path
+
+    spec = find_spec("neurosym_cli.conf")
+    return Path(spec.origin).parent if spec and spec.origin else None
+
+
+def check_choices(args: list[str]) -> str | None:
+    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None.
+
+    Hydra would say the same over a dozen lines; this names the valid choices and stays cheap (no Hydra import).
+    """
+    conf = _conf_dir()
+    if conf is None:
+        return None
+    for a in args:
+        key, sep, value = a.partition("=")
+        if not sep or key.startswith(("+", "~", "hydra")) or key not in ("task", "baseline", "budget"):
+            continue
+        choices = sorted(p.stem for p in (conf / key).glob("*.yaml"))
+        for v in value.split(","):  # sweeps: task=a,b
+            if v not in choices and not v.startswith(("glob(", "choice(", "range(")):
+                return f"unknown {key} {v!r}; choose one of: {', '.join(choices)}"
+    return None
+
+
 def _complete() -> bool:
     """Bash completion through Hydra's hook: complete the subcommand, then delegate to its app."""
     line = os.environ.get("COMP_LINE", "")
@@ -101,6 +128,10 @@ def main() -> None:
         raise SystemExit(2)
     if cmd not in AVAILABLE:
         print(f"neurosym: error: `neurosym {cmd}` is not available yet in this version", file=sys.stderr)
+        raise SystemExit(2)
+    bad = check_choices(rest)
+    if bad:
+        print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
     sys.argv = [f"neurosym {cmd}", *hoist_flags(rest)]
     from neurosym_cli.commands import apps

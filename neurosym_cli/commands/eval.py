@@ -9,6 +9,7 @@ from .. import __version__, artifacts
 from ..config import RunConfig
 from ..envs import make_env
 from ..evaluation import evaluate, summarize
+from ..plotting import figure2
 from ..policy import make_comm
 from ..utils.console import console, log, metrics_table
 from ..utils.device import resolve_device
@@ -45,9 +46,12 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         "config": ctx.config_dict(),
     })
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
+    table = collect(Path(cfg.exp_dir))
+    title = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): mean ± std over {len(seeds)} eval seeds"
+    png = figure2(table, title.replace(": ", ":\n"), Path(cfg.exp_dir) / "eval" / "figure2.png")
     if not ctx.multirun:
-        console.print(metrics_table(f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
-                                    f"mean ± std over {len(seeds)} eval seeds", collect(Path(cfg.exp_dir)), COLUMNS))
+        console.print(metrics_table(title, table, COLUMNS))
+        console.print(f"plot of every baseline evaluated here: {png}")
     return summary
 
 
