@@ -36,28 +36,34 @@ def env_steps_per_second(batch: int, steps: int = 50) -> float:
     """Episode-steps per second of reset + observe + step + cost with random actions (no policy, no grad)."""
     env = make_env(CROSS)
     g = torch.Generator().manual_seed(0)
-    buckets = env.reset(batch, g)
-    rng = Rng(g)
+    buckets = [b.to(DEVICE) for b in env.reset(batch, g)]
+    rng = Rng(g, DEVICE)
     t0 = time.perf_counter()
     with torch.no_grad():
         for s in buckets:
             for _ in range(steps):
                 env.observe(s, rng)
-                a = torch.randn(s.batch, s.n_agents, 2, generator=g)
+                a = rng.randn(s.batch, s.n_agents, 2)
                 s = env.step(s, a)
                 env.cost(s, a)
+    if DEVICE.type == "cuda":
+        torch.cuda.synchronize()
     return batch * steps / (time.perf_counter() - t0)
+
+
+DEVICE = torch.device("cpu")
 
 
 def train_rate(batch: int, rollouts: int, lr: float, lr_final: float, clip: float) -> tuple[float, CommTransformer]:
     torch.manual_seed(0)
     env = make_env(CROSS)
-    pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
+    pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(DEVICE)
     spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, lr=lr, lr_final=lr_final, grad_clip=clip,
                    checkpoint_every=10**9)
     t0 = time.perf_counter()
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(),
-        lambda s: None)
+    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), DEVICE, Quiet(), lambda s: None)
+    if DEVICE.type == "cuda":
+        torch.cuda.synchronize()
     return rollouts / (time.perf_counter() - t0), pol
 
 
@@ -68,10 +74,13 @@ def main() -> None:
     ap.add_argument("--learn", type=int, default=0, help="rollout budget of the learning comparison (0 = skip)")
     ap.add_argument("--only", choices=["reference", "batched"], default=None, help="run one side of --learn only")
     ap.add_argument("--skip-speed", action="store_true", help="skip the throughput figures")
+    ap.add_argument("--device", default="cpu", help="cpu or cuda")
     ap.add_argument("--json", default="", help="also write the figures to this file")
     args = ap.parse_args()
+    global DEVICE
+    DEVICE = torch.device(args.device)
     torch.set_num_threads(args.threads)
-    out: dict = {"threads": args.threads, "torch": torch.__version__}
+    out: dict = {"threads": args.threads, "torch": torch.__version__, "device": args.device}
 
     if not args.skip_speed:
         speed(args, out)
@@ -85,7 +94,7 @@ def main() -> None:
 def speed(args, out: dict) -> None:
     print("== simulator: episode-steps/s vs batch (random-cross, 10-40 agents, no policy)")
     out["env_steps_per_s"] = {}
-    for b in (1, 10, 100, 1000):
+    for b in (1, 10, 100, 1000, 10000):
         r = env_steps_per_second(b)
         out["env_steps_per_s"][b] = r
         print(f"  batch {b:5d}: {r:12,.0f} episode-steps/s")
@@ -110,7 +119,7 @@ def learn(args, out: dict) -> None:
         t0 = time.perf_counter()
         _, pol = train_rate(b, args.learn, lr, lrf, clip)
         wall = time.perf_counter() - t0
-        s = summarize(evaluate(env, pol, make_comm("full", 5), range(20), torch.device("cpu")))["cost"]
+        s = summarize(evaluate(env, pol, make_comm("full", 5), range(20), DEVICE))["cost"]
         out[f"learn_{name}"] = {"rollouts": args.learn, "wall_s": wall, "eval_loss": s["mean"], "std": s["std"]}
         print(f"  {name:9s}: eval loss {s['mean']:8.2f} ± {s['std']:.2f}   wall {wall / 60:6.1f} min", flush=True)
 

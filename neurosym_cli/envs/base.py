@@ -78,13 +78,20 @@ class Rng:
     def __init__(self, gens: torch.Generator | Sequence[torch.Generator], device: torch.device | str = "cpu"):
         self.gens = gens
         self.device = torch.device(device)
+        self._device_gen: torch.Generator | None = None
+        if isinstance(gens, torch.Generator) and self.device.type != "cpu":
+            # batch draws on an accelerator: a device generator seeded from the CPU one (no host-device copies)
+            seed = int(torch.randint(0, 2**62, (1,), generator=gens))
+            self._device_gen = torch.Generator(device=self.device).manual_seed(seed)
 
     @property
     def per_episode(self) -> bool:
         return not isinstance(self.gens, torch.Generator)
 
     def _draw(self, fn, batch: int, shape: tuple[int, ...]) -> Tensor:
-        # Generators live on the CPU; drawing there keeps CPU and GPU runs bit-identical in their inputs.
+        if self._device_gen is not None:
+            return fn((batch, *shape), generator=self._device_gen, device=self.device)
+        # per-episode generators live on the CPU, so an episode's draws are the same on any device
         if isinstance(self.gens, torch.Generator):
             out = fn((batch, *shape), generator=self.gens)
         else:
