@@ -119,9 +119,9 @@ class ModelConfig:
 class OptimConfig:
     """Batched BPTT optimisation (decisions.md 'Training': chosen by what trains best)."""
 
-    lr: float = 3e-3
-    """Adam learning rate"""
-    lr_final: float = 3e-4
+    lr: float = 1e-2
+    """Adam learning rate at the start (cosine decay to lr_final); tuned in docs/performance.md"""
+    lr_final: float = 1e-3
     """learning rate at the end of the budget (cosine decay); equal to lr for a constant rate"""
     grad_clip: float = 1.0
     """max global gradient norm"""
@@ -141,7 +141,7 @@ class BudgetConfig:
     name: str = MISSING
     train_rollouts: int = 10_000
     """rollouts used to train the oracle (and the dist / no-comm models)"""
-    batch_rollouts: int = 100
+    batch_rollouts: int = 50
     """rollouts per optimizer step"""
     eval_seeds: int = 20
     """evaluation seeds; every seed re-seeds everything"""

@@ -51,10 +51,12 @@ def rollout(
     rng: Rng,
     horizon: int,
     detach_state: bool = False,
+    stats: bool = True,
 ) -> Trajectory:
     """Run ``horizon`` steps from ``state``. Gradients flow through the dynamics unless torch.no_grad is active
-    or ``detach_state`` cuts them between steps."""
-    costs, stats, cols = [], [], []
+    or ``detach_state`` cuts them between steps. ``stats=False`` skips degree and collision records (training
+    needs only the cost; they are then zeros)."""
+    costs, records, cols = [], [], []
     for _ in range(horizon):
         if detach_state:
             state = state.detach()
@@ -63,8 +65,13 @@ def rollout(
         out = policy(obs, lambda logits, r: comm.select(ctx, logits, r))
         state = env.step(state, out.action)
         costs.append(env.cost(state, out.action))
-        with torch.no_grad():
-            stats.append(torch.stack(degree_stats(out.masks)))
-            cols.append(env.collisions(state))
-    s = torch.stack(stats)  # (T, 4, B)
-    return Trajectory(torch.stack(costs), s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols))
+        if stats:
+            with torch.no_grad():
+                records.append(torch.stack(degree_stats(out.masks)))
+                cols.append(env.collisions(state))
+    cost = torch.stack(costs)  # (T, B)
+    if not stats:
+        zero = torch.zeros_like(cost.detach())
+        return Trajectory(cost, zero, zero, zero, zero, zero)
+    s = torch.stack(records)  # (T, 4, B)
+    return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols))

@@ -25,8 +25,8 @@ class FitSpec:
     rollouts: int  # total training rollouts
     batch: int  # rollouts per optimizer step
     horizon: int  # T
-    lr: float = 3e-3
-    lr_final: float = 3e-4
+    lr: float = 1e-2
+    lr_final: float = 1e-3
     grad_clip: float = 1.0
     gamma: float = 1.0
     detach_state: bool = False
@@ -89,7 +89,7 @@ def fit(
         # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory
         total_cost, n_eps = 0.0, 0
         for bucket in env.reset(batch, gen):
-            traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state)
+            traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
             loss = (traj.cost * discount[:, None]).sum() / (batch * spec.horizon)
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())

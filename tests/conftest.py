@@ -7,7 +7,9 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
-torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+# at most 2 threads (CI has 2 cores); OMP_NUM_THREADS=1 when the machine is busy (oversubscribed OpenMP
+# threads spin and slow BPTT down by an order of magnitude)
+torch.set_num_threads(int(os.environ.get("OMP_NUM_THREADS", max(1, min(2, os.cpu_count() or 1)))))
 
 
 @pytest.fixture

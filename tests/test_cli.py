@@ -14,7 +14,7 @@ from conftest import ROOT, neurosym_cmd
 
 
 def run(args, tmp_path, check=True, timeout=300):
-    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path), "OMP_NUM_THREADS": "2"}
+    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path)}
     p = subprocess.run([*neurosym_cmd(), *args], cwd=tmp_path, env=env, capture_output=True, text=True,
                        timeout=timeout)
     if check and p.returncode != 0:
