@@ -147,6 +147,10 @@ class BudgetConfig:
     """evaluation seeds; every seed re-seeds everything"""
     horizon: Optional[int] = None
     """override of the task horizon (tiny budgets only); null keeps the task's"""
+    synth_rollouts: int = 300
+    """oracle rollouts in the synthesis dataset D (paper: 300)"""
+    mcmc_steps: int = 10_000
+    """MCMC proposals per program (paper: 10,000), restarts included"""
     checkpoint_every: int = 10
     """optimizer steps between checkpoints (an interrupted run resumes from the last one)"""
     log_every: int = 5
@@ -157,6 +161,8 @@ class BudgetConfig:
         _check(self.batch_rollouts > 0, f"budget.batch_rollouts must be positive, got {self.batch_rollouts}")
         _check(self.eval_seeds > 0, f"budget.eval_seeds must be positive, got {self.eval_seeds}")
         _check(self.horizon is None or self.horizon > 0, "budget.horizon must be positive or null")
+        _check(self.synth_rollouts > 0, f"budget.synth_rollouts must be positive, got {self.synth_rollouts}")
+        _check(self.mcmc_steps > 0, f"budget.mcmc_steps must be positive, got {self.mcmc_steps}")
         _check(self.checkpoint_every > 0 and self.log_every > 0, "budget.checkpoint_every/log_every must be positive")
 
 
@@ -166,14 +172,46 @@ class BaselineConfig:
 
     name: str = MISSING
     comm: str = "full"
-    """communication provider: full, topk (hard-attn), nearest (dist), none (no-comm)"""
+    """communication provider: full, topk (hard-attn), nearest (dist), none (no-comm), program (prog)"""
+    det: bool = False
+    """program baselines: no random rules (det-prog, paper appendix B)"""
     model: str = "oracle"
     """which trained weights: oracle (shared by tf-full / hard-attn), or own (trained with this mask)"""
     description: str = ""
 
     def __post_init__(self) -> None:
-        _check(self.comm in ("full", "topk", "nearest", "none"), f"baseline.comm: unknown provider {self.comm!r}")
+        _check(self.comm in ("full", "topk", "nearest", "none", "program"), f"baseline.comm: unknown provider {self.comm!r}")
         _check(self.model in ("oracle", "own"), f"baseline.model must be oracle or own, got {self.model!r}")
+
+
+@dataclass
+class SynthConfig:
+    """MCMC program synthesis (paper section 3.4; decisions.md 'Synthesis')."""
+
+    stride: int = 2
+    """keep every stride-th time step of the dataset rollouts (consecutive states are near-duplicates)"""
+    restarts: int = 4
+    """independent chains from random programs before the final phase"""
+    final_fraction: float = 0.2
+    """share of the steps spent in the final chain started from the best program found"""
+    temperature: float = 0.1
+    """Metropolis temperature relative to the current objective: accept a worse program with
+    probability exp(-(new - cur) / (temperature * |cur|)) (reference: 0.1)"""
+    objective: str = "paper"
+    """paper: L1 + lam * max_i(in + out); hinge: L1 + lam * (relu(max in - K) + relu(max out - K)) (reference)"""
+    random_samples: int = 1
+    """samples of every random rule used to estimate the expected objective (common random numbers)"""
+    max_depth: int = 2
+    """filter depth: 1 = single tests, 2 = and/or of two tests"""
+
+    def __post_init__(self) -> None:
+        _check(self.stride > 0, "synth.stride must be positive")
+        _check(self.restarts >= 0, "synth.restarts must be non-negative")
+        _check(0.0 <= self.final_fraction < 1.0, "synth.final_fraction must lie in [0, 1)")
+        _check(self.temperature > 0, "synth.temperature must be positive")
+        _check(self.objective in ("paper", "hinge"), "synth.objective must be paper or hinge")
+        _check(self.random_samples > 0, "synth.random_samples must be positive")
+        _check(self.max_depth in (1, 2), "synth.max_depth must be 1 or 2")
 
 
 @dataclass
@@ -187,6 +225,10 @@ class RunConfig:
     """K: number of program rules, also k of hard-attn and dist (paper section 4: K = d0)"""
     lam: float = 0.5
     """paper's lambda-tilde: weight of the degree term in the synthesis objective"""
+    features: str = "v1"
+    """program feature map: v1 (vectors, norms, angles) or v2 (plus quadratic terms)"""
+    program: str = ""
+    """show-program: path of a program file (empty: the one synth wrote for this config)"""
     device: str = "auto"
     """auto (GPU when present), cpu, cuda"""
     threads: int = 0
@@ -203,6 +245,7 @@ class RunConfig:
     optim: OptimConfig = field(default_factory=OptimConfig)
     budget: BudgetConfig = field(default_factory=BudgetConfig)
     baseline: BaselineConfig = field(default_factory=BaselineConfig)
+    synth: SynthConfig = field(default_factory=SynthConfig)
 
     def __post_init__(self) -> None:
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")
@@ -211,6 +254,7 @@ class RunConfig:
                f"device must be auto, cpu or cuda, got {self.device!r}")
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
+        _check(self.features in ("v1", "v2"), f"features must be v1 or v2, got {self.features!r}")
 
     @property
     def horizon(self) -> int:

@@ -121,6 +121,10 @@ class FormationEnv:
             rel = rel + self.cfg.noise_std * rng.randn(b, n, n, 2)
         return Observation(agent=state.pos - state.goal, rel=rel)
 
+    def effective_action(self, action: Tensor) -> Tensor:
+        """(B, N, 2) the velocity actually flown (speed-clipped): what synthesis imitates."""
+        return clip_speed(action, self.cfg.v_max)
+
     def step(self, state: EnvState, action: Tensor) -> EnvState:
         """action: (B, N, 2) desired velocity; the speed is clipped to v_max, x <- x + dt v."""
         v = clip_speed(action, self.cfg.v_max)

@@ -58,6 +58,10 @@ class UnlabeledGoalsEnv:
         p = torch.softmax(action, -1)
         return torch.zeros_like(p).scatter(-1, state.goal_order, p)
 
+    def effective_action(self, action: Tensor) -> Tensor:
+        """(B, N, G) the goal weights p_i: what synthesis imitates."""
+        return torch.softmax(action, -1)
+
     def step(self, state: EnvState, action: Tensor) -> EnvState:
         p = self.goal_weights(state, action)  # (B, N, G)
         to_goal = state.goal[:, None, :, :] - state.pos[:, :, None, :]  # (B, N, G, 2)

@@ -13,7 +13,10 @@ import torch
 from torch import Tensor
 
 from ..config import ConfigError
+from ..dsl.ast import Program
+from ..dsl.interpret import program_mask
 from ..envs.base import EnvState, MultiAgentEnv, Observation, Rng, eye_mask
+from ..envs.features import PairFeatures
 
 
 @dataclass
@@ -89,6 +92,20 @@ class NearestComm:
 
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
         return _topk_mask(-ctx.env.true_distance(ctx.state), self.k)
+
+
+class ProgramComm:
+    """prog: a synthesized program decides whom each agent hears, one program round per communication round
+    (paper sections 3.2-3.3; random rules draw from the episode's random source)."""
+
+    name = "program"
+
+    def __init__(self, program: Program, kind: str, features: str = "v1"):
+        self.program, self.kind, self.features = program, kind, features
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        feats = PairFeatures(self.kind, ctx.obs.agent, ctx.obs.rel, self.features)
+        return program_mask(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
 
 
 def make_comm(kind: str, k: int) -> CommProvider:

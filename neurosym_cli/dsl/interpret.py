@@ -1,0 +1,86 @@
+"""Batched meaning of programs: a program plus named features -> the communication mask (B, N, N).
+
+Features are looked up by name through a ``FeatureView`` (agent-level features broadcast over j), so the
+language is independent of any environment and can be tested on hand-built tensors.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import torch
+from torch import Tensor
+
+from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond
+
+
+class FeatureView(Protocol):
+    """Named features of every pair (i, j) of a bucket."""
+
+    batch: int  # B
+    n_agents: int  # N
+    device: torch.device
+
+    def __getitem__(self, name: str) -> Tensor:
+        """(B, N, N), or (B, N, 1) for a feature of agent i alone."""
+        ...
+
+
+class UniformSource(Protocol):
+    def rand(self, batch: int, *shape: int) -> Tensor: ...
+
+
+class UnknownFeature(KeyError):
+    pass
+
+
+def linear(f: Linear, feats: FeatureView) -> Tensor:
+    """(B, N, N) value of sum_k w_k phi_k."""
+    b, n = feats.batch, feats.n_agents
+    out = torch.zeros(b, n, n, device=feats.device)
+    for name, w in f.terms:
+        out = out + w * feats[name]
+    return out
+
+
+def cond(c: Cond, feats: FeatureView) -> Tensor:
+    """(B, N, N) bool: which j pass the filter of agent i (self not yet removed)."""
+    if isinstance(c, TrueCond):
+        return torch.ones(feats.batch, feats.n_agents, feats.n_agents, dtype=torch.bool, device=feats.device)
+    if isinstance(c, Test):
+        return linear(c.lhs, feats) >= c.threshold
+    if isinstance(c, And):
+        return cond(c.left, feats) & cond(c.right, feats)
+    if isinstance(c, Or):
+        return cond(c.left, feats) | cond(c.right, feats)
+    raise TypeError(f"not a condition: {c!r}")
+
+
+def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor:
+    """(B, N) long: the agent each agent i asks under rule r, or -1 when its filter passes nobody."""
+    b, n = feats.batch, feats.n_agents
+    passing = cond(r.cond, feats) & ~torch.eye(n, dtype=torch.bool, device=feats.device)
+    if isinstance(r, ArgMaxRule):
+        score = linear(r.score, feats)
+    elif isinstance(r, RandomRule):
+        if rng is None:
+            raise ValueError("a random rule needs a random source")
+        score = rng.rand(b, n, n)  # the argmax of iid uniforms over the passing agents is a uniform pick
+    else:
+        raise TypeError(f"not a rule: {r!r}")
+    pick = score.masked_fill(~passing, float("-inf")).argmax(-1)
+    return torch.where(passing.any(-1), pick, torch.full_like(pick, -1))
+
+
+def picks_to_mask(picks: Tensor, n: int) -> Tensor:
+    """picks: (B, N, K) long with -1 for none -> (B, N, N) bool union of the picks."""
+    b = picks.shape[0]
+    mask = torch.zeros(b, picks.shape[1], n + 1, dtype=torch.bool, device=picks.device)
+    mask.scatter_(-1, torch.where(picks < 0, n, picks), True)  # column n collects the "nobody" picks
+    return mask[..., :n]
+
+
+def program_mask(p: Program, round: int, feats: FeatureView, rng: UniformSource | None) -> Tensor:
+    """(B, N, N) bool: agent i hears j when one of the round's rules picks j (paper section 3.2)."""
+    picks = torch.stack([rule_picks(r, feats, rng) for r in p.rounds[round]], -1)  # (B, N, K)
+    return picks_to_mask(picks, feats.n_agents)

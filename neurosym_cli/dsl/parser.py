@@ -1,0 +1,208 @@
+"""Reads the text form of programs back (the exact inverse of ``printer.to_text``); never Python eval.
+
+Grammar (whitespace-insensitive within a line; '#' starts a comment; one rule per line):
+    file   := rule_line+ | ('round' INT ':' rule_line+)+
+    rule   := 'argmax' '(' 'map' '(' linear ',' filter ')' ')'  |  'random' '(' filter ')'
+    filter := 'filter' '(' cond ',' 'l' ')'
+    cond   := conj ('or' conj)*        conj := atom ('and' atom)*
+    atom   := 'true' | '(' cond ')' | linear '>=' number
+    linear := ['-'] term (('+' | '-') term)*        term := number '*' NAME | NAME
+Errors name the line and column.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond
+
+
+class ProgramSyntaxError(ValueError):
+    """Malformed program text; ``line`` and ``col`` are 1-based."""
+
+    def __init__(self, msg: str, line: int, col: int, source: str = "<program>"):
+        super().__init__(f"{source}:{line}:{col}: {msg}")
+        self.line, self.col, self.msg = line, col, msg
+
+
+_TOKEN = re.compile(r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+                    r"|(?P<op>>=|[-+*(),:]))")
+
+
+@dataclass
+class _Tok:
+    kind: str  # num, name, op, end
+    text: str
+    col: int  # 1-based
+
+
+def _tokenize(line: str, lineno: int, source: str) -> list[_Tok]:
+    toks, pos = [], 0
+    while pos < len(line):
+        if line[pos:].strip() == "":
+            break
+        m = _TOKEN.match(line, pos)
+        if not m or m.end() == pos:
+            col = pos + 1 + (len(line[pos:]) - len(line[pos:].lstrip()))
+            raise ProgramSyntaxError(f"unexpected character {line[col - 1]!r}", lineno, col, source)
+        kind = m.lastgroup or "op"
+        toks.append(_Tok(kind, m.group(kind), m.start(kind) + 1))
+        pos = m.end()
+    toks.append(_Tok("end", "", len(line.rstrip()) + 1))
+    return toks
+
+
+class _LineParser:
+    def __init__(self, toks: list[_Tok], lineno: int, source: str):
+        self.toks, self.i, self.lineno, self.source = toks, 0, lineno, source
+
+    def peek(self) -> _Tok:
+        return self.toks[self.i]
+
+    def fail(self, msg: str, tok: _Tok | None = None) -> ProgramSyntaxError:
+        tok = tok or self.peek()
+        found = "end of line" if tok.kind == "end" else repr(tok.text)
+        return ProgramSyntaxError(f"{msg}, found {found}", self.lineno, tok.col, self.source)
+
+    def expect(self, text: str) -> _Tok:
+        tok = self.peek()
+        if tok.text != text or tok.kind == "end":
+            raise self.fail(f"expected {text!r}")
+        self.i += 1
+        return tok
+
+    def accept(self, text: str) -> bool:
+        if self.peek().text == text and self.peek().kind != "end":
+            self.i += 1
+            return True
+        return False
+
+    def number(self) -> float:
+        neg = self.accept("-")
+        tok = self.peek()
+        if tok.kind != "num":
+            raise self.fail("expected a number")
+        self.i += 1
+        v = float(tok.text)
+        return -v if neg else v
+
+    def term(self, sign: float) -> tuple[str, float]:
+        tok = self.peek()
+        if tok.kind == "num":
+            w = float(tok.text)
+            self.i += 1
+            self.expect("*")
+            tok = self.peek()
+        else:
+            w = 1.0
+        if tok.kind != "name" or tok.text in ("and", "or", "true", "l"):
+            raise self.fail("expected a feature name")
+        self.i += 1
+        return tok.text, sign * w
+
+    def linear(self) -> Linear:
+        start = self.peek()
+        terms = [self.term(-1.0 if self.accept("-") else 1.0)]
+        while self.peek().text in ("+", "-") and self.peek().kind == "op":
+            sign = -1.0 if self.peek().text == "-" else 1.0
+            self.i += 1
+            terms.append(self.term(sign))
+        names = [n for n, _ in terms]
+        if len(set(names)) != len(names):
+            raise self.fail("a feature appears twice in one linear form", start)
+        return Linear(tuple(terms))
+
+    def atom(self) -> Cond:
+        if self.peek().kind == "name" and self.peek().text == "true":
+            self.i += 1
+            return TrueCond()
+        if self.accept("("):
+            c = self.cond()
+            self.expect(")")
+            return c
+        lhs = self.linear()
+        self.expect(">=")
+        return Test(lhs, self.number())
+
+    def conj(self) -> Cond:
+        c = self.atom()
+        while self.peek().kind == "name" and self.peek().text == "and":
+            self.i += 1
+            c = And(c, self.atom())
+        return c
+
+    def cond(self) -> Cond:
+        c = self.conj()
+        while self.peek().kind == "name" and self.peek().text == "or":
+            self.i += 1
+            c = Or(c, self.conj())
+        return c
+
+    def filter(self) -> Cond:
+        self.expect("filter")
+        self.expect("(")
+        c = self.cond()
+        self.expect(",")
+        self.expect("l")
+        self.expect(")")
+        return c
+
+    def rule(self) -> Rule:
+        tok = self.peek()
+        if tok.text == "argmax":
+            self.i += 1
+            self.expect("(")
+            self.expect("map")
+            self.expect("(")
+            score = self.linear()
+            self.expect(",")
+            cond = self.filter()
+            self.expect(")")
+            self.expect(")")
+            r: Rule = ArgMaxRule(score, cond)
+        elif tok.text == "random":
+            self.i += 1
+            self.expect("(")
+            cond = self.filter()
+            self.expect(")")
+            r = RandomRule(cond)
+        else:
+            raise self.fail("expected a rule: argmax(map(...)) or random(filter(...))")
+        if self.peek().kind != "end":
+            raise self.fail("expected end of line after the rule")
+        return r
+
+
+def parse(text: str, source: str = "<program>") -> Program:
+    """Parse program text; raises ProgramSyntaxError with line and column."""
+    rounds: list[list[Rule]] = []
+    headed = None
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0]
+        if not line.strip():
+            continue
+        toks = _tokenize(line, lineno, source)
+        if toks[0].text == "round":
+            if headed is False:
+                raise ProgramSyntaxError("a 'round' header after rules without one", lineno, toks[0].col, source)
+            headed = True
+            p = _LineParser(toks, lineno, source)
+            p.i = 1
+            num = p.peek()
+            if num.kind != "num" or not num.text.isdigit() or int(num.text) != len(rounds) + 1:
+                raise p.fail(f"expected round number {len(rounds) + 1}")
+            p.i += 1
+            p.expect(":")
+            if p.peek().kind != "end":
+                raise p.fail("expected end of line after the round header")
+            rounds.append([])
+            continue
+        if headed is None:
+            headed = False
+            rounds.append([])
+        rounds[-1].append(_LineParser(toks, lineno, source).rule())
+    if not rounds or any(not r for r in rounds):
+        raise ProgramSyntaxError("a program needs at least one rule in every round", max(1, len(text.splitlines())), 1,
+                                 source)
+    return Program(tuple(tuple(r) for r in rounds))

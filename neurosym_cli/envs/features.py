@@ -1,0 +1,87 @@
+"""The feature map phi(s_i, o_ij) of the programs (paper section 3.2), with named features in world units.
+
+Version 1 (decisions.md): every 2-D vector of the agent's state and of its observation of j, each with its
+norm and angle. Formation: goal vector g_i - x_i -> gx, gy, gd, gtheta; observation o_ij -> dx, dy, d, theta.
+Unlabeled goals: position -> px, py, p, ptheta; the k-th nearest goal (initial order) -> g{k}x, g{k}y, g{k}d,
+g{k}theta. Version 2 adds the quadratic terms of the first state vector with o_ij (gx_dx, gx_dy, gy_dx, gy_dy).
+Angles are radians in (-pi, pi]. Agent features are (B, N, 1) and broadcast over j.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor
+
+from ..config import ConfigError
+
+VERSIONS = ("v1", "v2")
+
+
+def _vec_names(prefix: str) -> list[str]:
+    if not prefix:  # the observation o_ij
+        return ["dx", "dy", "d", "theta"]
+    return [f"{prefix}x", f"{prefix}y", f"{prefix}d", f"{prefix}theta"]
+
+
+def agent_vectors(kind: str, agent: Tensor) -> tuple[list[str], Tensor]:
+    """(prefixes, (B, N, V, 2)) the 2-D vectors of each agent's state, from its policy input."""
+    b, n, ds = agent.shape
+    if kind == "formation":
+        return ["g"], (-agent).reshape(b, n, 1, 2)  # input is x - g; the goal vector is g - x
+    g = (ds - 2) // 2
+    vecs = torch.cat([agent[..., :2].reshape(b, n, 1, 2), (-agent[..., 2:]).reshape(b, n, g, 2)], 2)
+    return ["p"] + [f"g{k}" for k in range(1, g + 1)], vecs
+
+
+class PairFeatures:
+    """A FeatureView over one bucket: looks features up by name, computing each once."""
+
+    def __init__(self, kind: str, agent: Tensor, rel: Tensor, version: str = "v1"):
+        if version not in VERSIONS:
+            raise ConfigError(f"features must be one of {', '.join(VERSIONS)}, got {version!r}")
+        self.kind, self.version = kind, version
+        self.batch, self.n_agents = agent.shape[0], agent.shape[1]
+        self.device = agent.device
+        self.rel = rel  # (B, N, N, 2): o_ij
+        self.prefixes, self.vecs = agent_vectors(kind, agent)
+        self._cache: dict[str, Tensor] = {}
+        self.names = self._names()
+
+    def _names(self) -> list[str]:
+        names = [nm for p in self.prefixes for nm in _vec_names(p)] + _vec_names("")
+        if self.version == "v2":
+            f = self.prefixes[0]
+            names += [f"{f}x_dx", f"{f}x_dy", f"{f}y_dx", f"{f}y_dy"]
+        return names
+
+    def __getitem__(self, name: str) -> Tensor:
+        if name not in self._cache:
+            self._cache[name] = self._compute(name)
+        return self._cache[name]
+
+    def _compute(self, name: str) -> Tensor:
+        if name not in self.names:
+            raise KeyError(f"unknown feature {name!r}; this task has: {', '.join(self.names)}")
+        if name in ("dx", "dy"):
+            return self.rel[..., 0 if name == "dx" else 1]
+        if name == "d":
+            return self.rel.norm(dim=-1)
+        if name == "theta":
+            return torch.atan2(self.rel[..., 1], self.rel[..., 0])
+        if "_" in name:  # quadratic: <state component> * <observation component>
+            a, o = name.split("_")
+            return self[a] * self[o]
+        for k, p in enumerate(self.prefixes):
+            if name.startswith(p) and name[len(p):] in ("x", "y", "d", "theta"):
+                v = self.vecs[:, :, k]  # (B, N, 2)
+                part = name[len(p):]
+                val = {"x": lambda: v[..., 0], "y": lambda: v[..., 1], "d": lambda: v.norm(dim=-1),
+                       "theta": lambda: torch.atan2(v[..., 1], v[..., 0])}[part]()
+                return val.unsqueeze(-1)  # (B, N, 1): agent i's own feature, the same for every j
+        raise KeyError(name)
+
+
+def feature_names(kind: str, n_goals: int, version: str) -> list[str]:
+    """Names of a task's features without building tensors (for proposals and messages)."""
+    ds = 2 if kind == "formation" else 2 + 2 * n_goals
+    return PairFeatures(kind, torch.zeros(1, 2, ds), torch.zeros(1, 2, 2, 2), version).names
