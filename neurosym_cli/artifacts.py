@@ -12,86 +12,18 @@ never leaves a half-written artifact. Checkpoints are loaded with ``weights_only
 
 from __future__ import annotations
 
-import csv
 import io
-import json
-import os
-import tempfile
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import torch
 
-from .config import ModelConfig, RunConfig, UserError
+from .config import ModelConfig
+from .utils.io import ArtifactError, atomic_write_bytes, read_json, write_csv, write_json, write_text  # noqa: F401
 from .policy.transformer import CommTransformer
 
 CHECKPOINT_FORMAT = "neurosym-policy/1"
-
-
-class ArtifactError(UserError):
-    """A required artifact is missing or unreadable; the message says which command makes it."""
-
-
-# ------------------------------------------------------------------------------------------------ paths
-def model_name(cfg: RunConfig) -> str:
-    """Directory name of the weights a baseline uses: the shared oracle, or its own trained model."""
-    if cfg.baseline.model == "oracle":
-        return "oracle"
-    return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
-
-
-def baseline_label(cfg: RunConfig) -> str:
-    """Name of a baseline's evaluation directory (k is part of it where the mask depends on k)."""
-    return cfg.baseline.name if cfg.baseline.comm in ("full", "none") else f"{cfg.baseline.name}-k{cfg.rules}"
-
-
-def train_dir(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "train" / model_name(cfg)
-
-
-def eval_dir(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "eval" / baseline_label(cfg)
-
-
-# ------------------------------------------------------------------------------------------ atomic I/O
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def write_text(path: Path, text: str) -> None:
-    atomic_write_bytes(path, text.encode())
-
-
-def write_json(path: Path, obj: Any) -> None:
-    write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
-
-
-def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
-    buf = io.StringIO()
-    if rows:
-        w = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    write_text(path, buf.getvalue())
-
-
-def read_json(path: Path) -> Any:
-    try:
-        return json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise ArtifactError(f"cannot read {path}: {e}") from None
 
 
 def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:

@@ -15,7 +15,7 @@ COMMANDS = {
     "retrain": "retrain",
     "show-program": "show_program",
 }
-AVAILABLE = {"train", "eval"}
+AVAILABLE = {"train", "eval", "synth", "show-program"}
 
 USAGE = """usage: neurosym <command> [hydra overrides] [hydra flags]
 
@@ -24,20 +24,24 @@ Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).
 commands:
   train          train the transformer oracle (or a baseline's own model) by backprop through the dynamics
   eval           evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions
-  synth          synthesize a communication program by MCMC           (not available yet)
+  synth          synthesize a communication program by MCMC (paper sections 3.2, 3.4)
   retrain        retrain the transformer under a synthesized program   (not available yet)
-  show-program   print a synthesized program in the paper's notation   (not available yet)
+  show-program   print a synthesized program in the paper's notation
 
 examples:
   neurosym train task=random-cross budget=quick
   neurosym train task=random-grid baseline=dist
   neurosym eval task=random-cross baseline=hard-attn
+  neurosym synth task=random-grid rules=2 lam=0.5 features=v1
+  neurosym synth -m rules=2,3,4,5 lam=0.3,0.5,0.7,1.0 hydra/launcher=joblib
+  neurosym show-program task=random-grid rules=2
+  neurosym eval task=random-grid baseline=prog rules=2
   neurosym train -m seed=0,1,2 hydra/launcher=joblib
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running
 
 tasks: random-cross, random-grid, unlabeled-goals, two-groups-cross
-baselines: tf-full, hard-attn, dist, no-comm
+baselines: tf-full, hard-attn, dist, no-comm, prog, det-prog
 budgets: paper, quick, tiny
 """
 

@@ -5,17 +5,18 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .. import __version__, artifacts
-from ..config import RunConfig
+from .. import __version__, artifacts, paths
+from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..evaluation import evaluate, summarize
 from ..plotting import figure2
 from ..policy import make_comm
+from ..policy.comm import ProgramComm
+from ..utils.io import load_program
 from ..utils.console import console, log, metrics_table
 from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
 from ._run import Context
-from .train import train_command
 
 COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
            ("collisions", "collisions")]
@@ -24,25 +25,31 @@ COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"
 def run(cfg: RunConfig, ctx: Context) -> dict:
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
-    payload = artifacts.load_checkpoint(artifacts.train_dir(cfg) / "model.pt", train_command(cfg))
+    payload = artifacts.load_checkpoint(paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
     if not payload.get("done"):
         log.warning("the model is only partly trained (step %d); evaluating it anyway; `%s` finishes it",
-                    payload["fit"]["step"], train_command(cfg))
+                    payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
     env = make_env(cfg.task, cfg.horizon)
-    comm = make_comm(cfg.baseline.comm, cfg.rules)
+    if cfg.baseline.comm == "program":
+        program = load_program(paths.program_file(cfg), paths.synth_command(cfg))
+        if program.n_rounds != cfg.task.rounds:
+            raise ConfigError(f"the program has {program.n_rounds} round(s), the task {cfg.task.rounds}")
+        comm = ProgramComm(program, cfg.task.kind, cfg.features)
+    else:
+        comm = make_comm(cfg.baseline.comm, cfg.rules)
     seeds = list(range(cfg.budget.eval_seeds))
     t0 = time.perf_counter()
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
     seconds = time.perf_counter() - t0
     summary = summarize(rows)
-    label = artifacts.baseline_label(cfg)
-    out = artifacts.eval_dir(cfg)
+    label = paths.baseline_label(cfg)
+    out = paths.eval_dir(cfg)
     artifacts.write_csv(out / "metrics.csv", rows)
     artifacts.write_json(out / "metrics.json", {
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
         "seeds": len(seeds), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
-        "model": str(artifacts.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
+        "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
         "config": ctx.config_dict(),
     })
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)

@@ -7,7 +7,7 @@ import time
 
 import torch
 
-from .. import __version__, artifacts
+from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
@@ -19,13 +19,6 @@ from ._run import Context
 
 # config sections that must match for a checkpoint to be resumed or extended
 _COMPAT = ("task", "model", "optim")
-
-
-def train_command(cfg: RunConfig) -> str:
-    """The command line that makes the weights ``cfg``'s baseline needs."""
-    base = "tf-full" if cfg.baseline.model == "oracle" else cfg.baseline.name
-    k = f" rules={cfg.rules}" if cfg.baseline.model == "own" and cfg.baseline.comm != "none" else ""
-    return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
 
 
 def fit_spec(cfg: RunConfig) -> FitSpec:
@@ -48,14 +41,15 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_env(cfg.task, cfg.horizon)
-    comm = make_comm(cfg.baseline.comm, cfg.rules)
+    # the oracle trains with full soft attention; dist and no-comm train with their own mask
+    comm = make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules)
     spec = fit_spec(cfg)
-    out = artifacts.train_dir(cfg)
+    out = paths.train_dir(cfg)
     ckpt = out / "model.pt"
     run_cfg = ctx.config_dict()
     state = None
     if ckpt.exists() and not cfg.overwrite:
-        payload = artifacts.load_checkpoint(ckpt, train_command(cfg))
+        payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
         _check_compatible(payload["config"], run_cfg, ckpt)
         policy = artifacts.policy_from_payload(payload)
         state = FitState(**payload["fit"])
@@ -75,7 +69,7 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         artifacts.save_checkpoint(ckpt, payload)
         artifacts.write_csv(out / "history.csv", st.history)
 
-    label = f"train {cfg.task.name} {artifacts.model_name(cfg)} seed{cfg.seed}"
+    label = f"train {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
              spec.horizon, device, out)
     t0 = time.perf_counter()

@@ -5,7 +5,7 @@ Grammar (whitespace-insensitive within a line; '#' starts a comment; one rule pe
     rule   := 'argmax' '(' 'map' '(' linear ',' filter ')' ')'  |  'random' '(' filter ')'
     filter := 'filter' '(' cond ',' 'l' ')'
     cond   := conj ('or' conj)*        conj := atom ('and' atom)*
-    atom   := 'true' | '(' cond ')' | linear '>=' number
+    atom   := 'true' | '(' cond ')' | linear ('>=' | '<=') number
     linear := ['-'] term (('+' | '-') term)*        term := number '*' NAME | NAME
 Errors name the line and column.
 """
@@ -27,7 +27,7 @@ class ProgramSyntaxError(ValueError):
 
 
 _TOKEN = re.compile(r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
-                    r"|(?P<op>>=|[-+*(),:]))")
+                    r"|(?P<op>>=|<=|[-+*(),:]))")
 
 
 @dataclass
@@ -122,6 +122,8 @@ class _LineParser:
             self.expect(")")
             return c
         lhs = self.linear()
+        if self.accept("<="):  # F <= c  is  -F >= -c
+            return Test(Linear(tuple((n, -w) for n, w in lhs.terms)), -self.number())
         self.expect(">=")
         return Test(lhs, self.number())
 

@@ -34,6 +34,8 @@ def cond_text(c: Cond) -> str:
     if isinstance(c, TrueCond):
         return "true"
     if isinstance(c, Test):
+        if len(c.lhs.terms) == 1 and c.lhs.terms[0][1] == -1.0:  # -f >= c reads better as f <= -c
+            return f"{c.lhs.terms[0][0]} <= {fmt_float(-c.threshold)}"
         return f"{linear_text(c.lhs)} >= {fmt_float(c.threshold)}"
     op = "and" if isinstance(c, And) else "or"
     left = _wrapped(c.left, c, right=False)
@@ -71,8 +73,9 @@ def to_text(p: Program) -> str:
 # ----------------------------------------------------------------------------------- plain language
 _NAMES = {
     "d": "distance", "theta": "bearing (rad)", "dx": "x-offset", "dy": "y-offset",
-    "gd": "own distance to goal", "gtheta": "own bearing to goal (rad)", "gx": "own x-offset from goal",
-    "gy": "own y-offset from goal",
+    "gd": "own distance to goal", "gtheta": "bearing to own goal (rad)", "gx": "x-offset to own goal",
+    "gy": "y-offset to own goal",
+    "px": "own x-position", "py": "own y-position", "pd": "own distance from the origin",
 }
 
 
@@ -88,9 +91,14 @@ def _cond_words(c: Cond) -> str:
     if isinstance(c, TrueCond):
         return ""
     if isinstance(c, Test):
+        if len(c.lhs.terms) == 1 and c.lhs.terms[0][1] == -1.0:
+            return f"{_NAMES.get(c.lhs.terms[0][0], c.lhs.terms[0][0])} is at most {-c.threshold:.3g}"
         return f"{_lin_words(c.lhs)} is at least {c.threshold:.3g}"
     op = " and " if isinstance(c, And) else " or "
-    return "(" + _cond_words(c.left) + op + _cond_words(c.right) + ")"
+    parts = [w for w in (_cond_words(c.left), _cond_words(c.right)) if w]
+    if len(parts) < 2:
+        return parts[0] if parts else ""
+    return "(" + op.join(parts) + ")"
 
 
 def describe(r: Rule) -> str:

@@ -82,3 +82,52 @@ def fail(msg: str) -> None:
     """Print a one-line error and exit non-zero (no traceback)."""
     print(f"neurosym: error: {msg}", file=sys.stderr)
     raise SystemExit(1)
+
+
+class SearchDisplay:
+    """Live view of an MCMC search: step, best objective split into its terms, acceptance per move type,
+    proposals/s. A rich live table on a terminal; a plain line every ~10% of the steps otherwise."""
+
+    def __init__(self, label: str, total: int, lam: float, rich: bool):
+        self.label, self.total, self.lam, self.rich = label, total, lam, rich
+        self.live = None
+        self.last = 0.0
+
+    def __enter__(self) -> "SearchDisplay":
+        if self.rich:
+            from rich.live import Live
+
+            self.live = Live(console=console, refresh_per_second=4, transient=False)
+            self.live.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.live is not None:
+            self.live.stop()
+
+    def _table(self, step: int, result, row) -> Table:
+        t = Table(title=f"{self.label}: step {step}/{self.total} ({row['phase']})", show_header=True,
+                  header_style="bold")
+        t.add_column("best objective")
+        t.add_column("= L1 action error")
+        t.add_column(f"+ {self.lam:g} x degree")
+        t.add_column("proposals/s", justify="right")
+        b = result.best_score
+        t.add_row(f"{b.total:.4f}", f"{b.l1:.4f}", f"{self.lam * b.degree:.4f} ({b.degree:.2f})",
+                  f"{result.proposals_per_second:.0f}")
+        acc = "  ".join(f"{m} {100 * a:.0f}%" for m, a in result.acceptance().items())
+        t.caption = f"acceptance: {acc}"
+        return t
+
+    def update(self, step: int, result, row) -> None:
+        now = time.perf_counter()
+        if self.live is not None:
+            if now - self.last > 0.25 or step == self.total:
+                self.live.update(self._table(step, result, row))
+                self.last = now
+        elif step == 1 or step == self.total or step % max(1, self.total // 10) == 0:
+            b = result.best_score
+            acc = " ".join(f"{m}={100 * a:.0f}%" for m, a in result.acceptance().items())
+            log.info("%s step %d/%d best %.4f = L1 %.4f + %g x degree %.3f | %.0f proposals/s | accept %s",
+                     self.label, step, self.total, b.total, b.l1, self.lam, b.degree,
+                     result.proposals_per_second, acc)

@@ -8,7 +8,7 @@ import numpy as np
 import torch
 
 # distinct streams derived from one user seed, so e.g. evaluation episodes never reuse training draws
-STREAM_TRAIN, STREAM_EVAL = 1, 2
+STREAM_TRAIN, STREAM_EVAL, STREAM_SYNTH_DATA, STREAM_SYNTH = 1, 2, 3, 4
 
 
 def seed_everything(seed: int) -> None:

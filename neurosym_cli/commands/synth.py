@@ -1,0 +1,93 @@
+"""`neurosym synth`: synthesize a communication program from the trained oracle (paper sections 3.2, 3.4)."""
+
+from __future__ import annotations
+
+import time
+
+import torch
+
+from .. import __version__, artifacts, paths
+from ..config import ConfigError, RunConfig
+from ..dsl.printer import to_text
+from ..envs import make_env
+from ..synth.dataset import collect, from_payload, to_payload
+from ..synth.objective import CachedScorer
+from ..synth.search import RoundSpec, as_program, search_round
+from ..utils.console import SearchDisplay, console, log, use_rich
+from ..utils.device import resolve_device
+from ..utils.io import save_program, write_csv, write_json
+from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
+from ._run import Context
+
+
+def _dataset(cfg: RunConfig, env, policy, device):
+    """The oracle dataset D, collected once per (oracle, rollouts, stride) and reused by every sweep job."""
+    path = paths.dataset_file(cfg)
+    if path.exists() and not cfg.overwrite:
+        try:
+            payload = torch.load(path, map_location="cpu", weights_only=True)
+            if payload.get("format") == "neurosym-dataset/1":
+                log.info("reusing the dataset %s", path)
+                return from_payload(payload)
+        except Exception:
+            log.warning("unreadable dataset %s; collecting it again", path)
+    t0 = time.perf_counter()
+    data = collect(env, policy, cfg.budget.synth_rollouts, cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA),
+                   device)
+    artifacts.save_checkpoint(path, to_payload(data))
+    pairs = sum(b.states * b.n_agents ** 2 for b in data)
+    log.info("collected D: %d rollouts, %d states, %.1fM agent pairs in %.0f s -> %s", cfg.budget.synth_rollouts,
+             sum(b.states for b in data), pairs / 1e6, time.perf_counter() - t0, path)
+    return data
+
+
+def run(cfg: RunConfig, ctx: Context) -> dict:
+    if cfg.baseline.comm != "program":
+        raise ConfigError(f"synth makes programs for baseline=prog or baseline=det-prog, not {cfg.baseline.name}")
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+    policy = artifacts.policy_from_payload(payload).to(device).eval()
+    env = make_env(cfg.task, cfg.horizon)
+    data = _dataset(cfg, env, policy, device)
+    out = paths.synth_dir(cfg)
+    spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
+                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det)
+    results, trace, rounds = [], [], []
+    rich = use_rich(cfg.progress, ctx.multirun)
+    for r in range(cfg.task.rounds):
+        # appendix A: each round's program is searched alone, the other rounds keep soft attention
+        scorer = CachedScorer(policy, env, cfg.task.kind, data, r, cfg.features, cfg.lam, cfg.synth.objective,
+                              cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device)
+        label = f"synth {cfg.task.name} {paths.program_tag(cfg)}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
+        with SearchDisplay(label, spec.steps, cfg.lam, rich) as disp:
+            res = search_round(scorer, spec, f"{cfg.seed}/{r}/{paths.program_tag(cfg)}",
+                               generator(cfg.seed, STREAM_SYNTH, 100 + r), disp.update)
+        full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
+        results.append(res)
+        trace += [{"round": r + 1, **row} for row in res.trace]
+        rounds.append({"round": r + 1, "objective": res.best_score.total, "l1": res.best_score.l1,
+                       "degree": res.best_score.degree, "seconds": res.seconds,
+                       "proposals_per_second": res.proposals_per_second, "acceptance": res.acceptance(),
+                       "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
+                       "full_forward_check": None if full is None else full.total})
+    program = as_program(results)
+    header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
+              f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
+    header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x degree "
+               f"{x['degree']:.4f}" for x in rounds]
+    save_program(out / "program.txt", to_text(program), header)
+    write_csv(out / "trace.csv", trace)
+    write_json(out / "summary.json", {
+        "command": "synth", "version": __version__, "task": cfg.task.name, "tag": paths.program_tag(cfg),
+        "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features, "det": cfg.baseline.det,
+        "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(paths.dataset_file(cfg)),
+        "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
+        "config": ctx.config_dict(),
+    })
+    console.print(f"[green]synthesized[/] {out / 'program.txt'}")
+    if not ctx.multirun:
+        from .show_program import render
+
+        render(program, rounds, cfg.lam)
+    return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds)}

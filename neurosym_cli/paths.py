@@ -1,0 +1,72 @@
+"""Where every artifact of an experiment lives (stdlib only, so light commands need no torch).
+
+    <exp_dir>/train/<model>/            model.pt, history.csv, manifest.json
+    <exp_dir>/synth/dataset-r<R>-s<S>.pt  the oracle dataset D, shared by every synthesis run of this oracle
+    <exp_dir>/synth/<program tag>/      program.txt, summary.json, trace.csv
+    <exp_dir>/eval/<baseline label>/    metrics.json, metrics.csv
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .config import RunConfig
+
+
+def model_name(cfg: RunConfig) -> str:
+    """Directory name of the weights a baseline uses: the shared oracle, or its own trained model."""
+    if cfg.baseline.model == "oracle":
+        return "oracle"
+    return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
+
+
+def program_tag(cfg: RunConfig) -> str:
+    """Name of one synthesis result: K, lambda, feature map, and det- for argmax-only programs."""
+    return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
+
+
+def baseline_label(cfg: RunConfig) -> str:
+    """Name of a baseline's evaluation directory (k, and the program's tag, where they matter)."""
+    if cfg.baseline.comm in ("full", "none"):
+        return cfg.baseline.name
+    if cfg.baseline.comm == "program":
+        return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
+    return f"{cfg.baseline.name}-k{cfg.rules}"
+
+
+def train_dir(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "train" / model_name(cfg)
+
+
+def oracle_checkpoint(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "train" / "oracle" / "model.pt"
+
+
+def synth_dir(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "synth" / program_tag(cfg)
+
+
+def program_file(cfg: RunConfig) -> Path:
+    return Path(cfg.program) if cfg.program else synth_dir(cfg) / "program.txt"
+
+
+def dataset_file(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "synth" / f"dataset-r{cfg.budget.synth_rollouts}-s{cfg.synth.stride}.pt"
+
+
+def eval_dir(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "eval" / baseline_label(cfg)
+
+
+def train_command(cfg: RunConfig, oracle: bool = False) -> str:
+    """The command line that makes the weights ``cfg``'s baseline needs (or the oracle's)."""
+    own = cfg.baseline.model == "own" and not oracle
+    base = cfg.baseline.name if own else "tf-full"
+    k = f" rules={cfg.rules}" if own and cfg.baseline.comm != "none" else ""
+    return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
+
+
+def synth_command(cfg: RunConfig) -> str:
+    det = " baseline=det-prog" if cfg.baseline.det else ""
+    return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
+            f" budget={cfg.budget.name} seed={cfg.seed}{det}")

@@ -1,0 +1,60 @@
+"""One synthesis run: the search space from the dataset, then MCMC for each communication round."""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+from typing import Callable
+
+import torch
+
+from ..dsl.ast import Program
+from ..dsl.sampling import SearchSpace, propose, random_rules
+from .mcmc import SearchResult, metropolis
+from .objective import CachedScorer
+
+
+def feature_quantiles(scorer: CachedScorer, gen: torch.Generator, n_q: int = 49,
+                      sample: int = 200_000) -> dict[str, tuple[float, ...]]:
+    """Empirical quantiles (2%..98%) of every feature over the dataset's pairs (self pairs excluded)."""
+    out = {}
+    qs = torch.linspace(0.02, 0.98, n_q)
+    for name in scorer.data[0].feats.names:
+        vals = []
+        for d in scorer.data:
+            v = d.feats[name].expand(d.s, d.n, d.n)
+            off = ~torch.eye(d.n, dtype=torch.bool, device=v.device).expand(d.s, -1, -1)
+            flat = v[off]
+            idx = torch.randint(0, flat.numel(), (min(sample, flat.numel()),), generator=gen).to(flat.device)
+            vals.append(flat[idx].float().cpu())
+        q = torch.quantile(torch.cat(vals), qs)
+        out[name] = tuple(sorted({round(float(x), 2) + 0.0 for x in q}))
+    return out
+
+
+@dataclass
+class RoundSpec:
+    steps: int
+    restarts: int
+    final_fraction: float
+    temperature: float
+    rules: int
+    max_depth: int
+    det: bool
+
+
+def search_round(scorer: CachedScorer, spec: RoundSpec, seed: str, gen: torch.Generator,
+                 on_step: Callable | None = None) -> SearchResult:
+    """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw."""
+    space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det)
+    rng = random.Random(seed)
+    return metropolis(
+        init=lambda: random_rules(space, rng),
+        propose=lambda rules: propose(rules, space, rng),
+        scorer=scorer, steps=spec.steps, restarts=spec.restarts, final_fraction=spec.final_fraction,
+        temperature=spec.temperature, rng=rng, on_step=on_step,
+    )
+
+
+def as_program(results: list[SearchResult]) -> Program:
+    return Program(tuple(r.best for r in results))
