@@ -137,3 +137,66 @@ def test_corrupt_checkpoint_is_reported(tmp_path):
     ckpt.write_bytes(b"not a checkpoint")
     p = run(["eval", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "corrupt checkpoint" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_synth_show_program_eval_smoke(tmp_path):
+    run(["train", "task=random-grid", "budget=tiny"], tmp_path)
+    run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    out = tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1"
+    text = (out / "program.txt").read_text()
+    from neurosym_cli.dsl import parse
+
+    prog = parse(text)
+    assert prog.n_rounds == 1 and len(prog.rounds[0]) == 2
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["rounds"][0]["proposals_per_second"] > 0
+    assert abs(summary["rounds"][0]["full_forward_check"] - summary["rounds"][0]["objective"]) < 1e-3
+    assert (out / "trace.csv").read_text().splitlines()[0].startswith("round,step,phase,move,accepted")
+    p = run(["show-program", "task=random-grid", "budget=tiny"], tmp_path)
+    assert "argmax(" in p.stdout or "random(" in p.stdout
+    assert "objective" in p.stdout
+    p = run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path)
+    m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-k2-lam0.5-v1/metrics.json").read_text())
+    assert m["summary"]["max_in"]["mean"] <= 2.0
+    # det-prog: argmax rules only
+    run(["synth", "task=random-grid", "budget=tiny", "baseline=det-prog"], tmp_path)
+    det = parse((tmp_path / "random-grid/tiny/seed0/synth/det-k2-lam0.5-v1/program.txt").read_text())
+    assert det.deterministic
+    # same seed, same program, byte for byte (the dataset is reused, the search re-run)
+    run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    assert (out / "program.txt").read_text() == text
+
+
+def test_synth_two_rounds_and_sweep(tmp_path):
+    run(["train", "task=unlabeled-goals", "budget=tiny"], tmp_path)
+    run(["synth", "-m", "task=unlabeled-goals", "budget=tiny", "rules=1,2", "lam=0.3,0.7"], tmp_path)
+    from neurosym_cli.dsl import parse
+
+    base = tmp_path / "unlabeled-goals/tiny/seed0/synth"
+    for k in (1, 2):
+        for lam in (0.3, 0.7):
+            p = parse((base / f"k{k}-lam{lam}-v1/program.txt").read_text())
+            assert p.n_rounds == 2 and all(len(r) == k for r in p.rounds)
+    assert len(list(base.glob("dataset-*.pt"))) == 1  # collected once, reused by the sweep
+
+
+def test_show_program_needs_no_torch_and_reports_bad_text(tmp_path):
+    prog = tmp_path / "p.txt"
+    prog.write_text("argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41, l)\n")
+    code = ("import sys; sys.argv=['neurosym','show-program','program=" + str(prog) + "'];"
+            "from neurosym_cli.cli import main\ntry:\n main()\nexcept SystemExit: pass\n"
+            "assert 'torch' not in sys.modules, 'torch imported'")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert "p.txt:2:28: expected ')'" in p.stderr, p.stderr
+    assert "Traceback" not in p.stderr
+    prog.write_text("argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41, l))\n")
+    p = run(["show-program", f"program={prog}"], tmp_path)
+    assert "ask the nearest agent whose bearing (rad) is at least -1.85" in p.stdout
+
+
+def test_synth_before_train_names_the_command(tmp_path):
+    p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0
+    assert "neurosym train task=random-grid baseline=tf-full budget=tiny seed=0" in p.stderr
+    p = run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0 and "neurosym" in p.stderr and "Traceback" not in p.stderr

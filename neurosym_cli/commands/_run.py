@@ -60,9 +60,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, Context], A
     _plain_logs_off_terminal()
     hc = HydraConfig.get()
     ctx = Context(cfg, hc.mode == RunMode.MULTIRUN, hc.runtime.output_dir)
-    import torch
-
     if typed.threads:
+        import torch  # only here: show-program must not pay for importing torch
+
         torch.set_num_threads(typed.threads)
     try:
         return fn(typed, ctx)

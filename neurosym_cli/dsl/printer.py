@@ -9,6 +9,8 @@ exact inverse: parse(to_text(p)) == p. ``describe`` gives a plain-language readi
 
 from __future__ import annotations
 
+import math
+
 from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond
 
 
@@ -25,7 +27,7 @@ def linear_text(f: Linear) -> str:
         if k == 0:
             parts.append(name if w == 1.0 else f"{fmt_float(w)}*{name}")
         else:
-            sign, mag = ("-", -w) if w < 0 else ("+", w)
+            sign, mag = ("-", -w) if math.copysign(1.0, w) < 0 else ("+", w)  # -0.0 prints as "- 0.0"
             parts.append(f"{sign} {name}" if mag == 1.0 else f"{sign} {fmt_float(mag)}*{name}")
     return " ".join(parts)
 
