@@ -37,10 +37,13 @@ class UnknownFeature(KeyError):
 def linear(f: Linear, feats: FeatureView) -> Tensor:
     """(B, N, N) value of sum_k w_k phi_k."""
     b, n = feats.batch, feats.n_agents
-    out = torch.zeros(b, n, n, device=feats.device)
+    out = None
     for name, w in f.terms:
-        out = out + w * feats[name]
-    return out
+        term = feats[name] if w == 1.0 else w * feats[name]
+        out = term if out is None else out + term
+    if out is None:
+        return torch.zeros(b, n, n, device=feats.device)
+    return out.expand(b, n, n)
 
 
 def cond(c: Cond, feats: FeatureView) -> Tensor:

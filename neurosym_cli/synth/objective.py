@@ -143,15 +143,22 @@ class CachedScorer:
     def _round_out(self, d: _Prepared, rows: Tensor, picks: Tensor) -> Tensor:
         """Output of the synthesized round for flat rows (M,) of (S N) with their picks (M, K) -> (M, D)."""
         layer = self.policy.rounds[self.round]
-        s_idx, i_idx = rows // d.n, rows % d.n
+        n = d.n
         valid = dedup_valid(picks)
         pk = picks.clamp(min=0)
-        lg = d.logits[self.round][s_idx[:, None], i_idx[:, None], pk]  # (M, K)
-        attn = torch.softmax(lg.masked_fill(~valid, NEG), -1) * valid
-        o_ji = d.rel[s_idx[:, None], pk, i_idx[:, None]]  # (M, K, 2): the sender's view of the receiver
-        msg = d.values[s_idx[:, None], pk] + torch.relu(layer.msg_edge(o_ji))  # (M, K, D)
+        s_n = (rows - rows % n)[:, None]  # (M, 1): s * N
+        i_idx = (rows % n)[:, None]
+        # flat gathers (one index tensor each) are several times faster than 3-index advanced indexing
+        lg = d.logits[self.round].reshape(-1)[rows[:, None] * n + pk]  # (M, K): l_ij of the picked j
+        # softmax over the <= K picked agents, written out: torch's softmax over a last dim of size K is slow on CPU
+        top = lg.masked_fill(~valid, NEG).amax(-1, keepdim=True)
+        e = torch.exp((lg - top).masked_fill(~valid, float("-inf")))  # 0 outside the picks; no inf * 0
+        attn = e / e.sum(-1, keepdim=True).clamp(min=1e-30)
+        o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + i_idx).flatten()).view(*pk.shape, 2)
+        vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten()).view(*pk.shape, -1)
+        msg = vals + torch.relu(layer.msg_edge(o_ji))  # (M, K, D): value of j plus its view o_ji of i
         agg = (attn.unsqueeze(-1) * msg).sum(1)
-        z = layer.norm1(d.x_in[s_idx, i_idx] + layer.out(agg))
+        z = layer.norm1(d.x_in.reshape(-1, d.x_in.shape[-1]).index_select(0, rows) + layer.out(agg))
         return layer.norm2(z + layer.ffn2(torch.relu(layer.ffn1(z))))
 
     def _l1_rows(self, d: _Prepared, rows: Tensor, picks: Tensor) -> Tensor:
