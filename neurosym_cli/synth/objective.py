@@ -83,8 +83,17 @@ class _Prepared:
         for q in range(round_idx):  # rounds before the synthesized one use full soft attention
             x, _ = policy.rounds[q].aggregate(x, self.logits[q], others, self.rel)
         self.x_in = x  # (S, N, D) input of the synthesized round
-        self.values = policy.rounds[round_idx].value(x)  # (S, N, D)
+        layer = policy.rounds[round_idx]
+        self.values = layer.value(x)  # (S, N, D)
         self.others = others
+        # the full message m_j->i = W_v x_j + ReLU(W_m o_ji) of every pair, when it fits (<= 8M pairs, ~0.5 GB):
+        # scoring then gathers K messages per agent instead of recomputing them
+        self.messages: Tensor | None = None
+        if self.s * self.n * self.n <= 8_000_000:
+            self.messages = torch.cat([
+                self.values[c:c + 2048, None, :, :]
+                + torch.relu(layer.msg_edge(self.rel[c:c + 2048].transpose(1, 2)))  # [i, j] from o_ji
+                for c in range(0, self.s, 2048)])  # (S, N, N, D): [s, i, j] = message j -> i
         self.uniforms: list[Tensor] = []
 
 
@@ -154,9 +163,13 @@ class CachedScorer:
         top = lg.masked_fill(~valid, NEG).amax(-1, keepdim=True)
         e = torch.exp((lg - top).masked_fill(~valid, float("-inf")))  # 0 outside the picks; no inf * 0
         attn = e / e.sum(-1, keepdim=True).clamp(min=1e-30)
-        o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + i_idx).flatten()).view(*pk.shape, 2)
-        vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten()).view(*pk.shape, -1)
-        msg = vals + torch.relu(layer.msg_edge(o_ji))  # (M, K, D): value of j plus its view o_ji of i
+        if d.messages is not None:
+            msg = d.messages.reshape(-1, d.messages.shape[-1]).index_select(0, (rows[:, None] * n + pk).flatten())
+            msg = msg.view(*pk.shape, -1)  # (M, K, D)
+        else:
+            o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + i_idx).flatten()).view(*pk.shape, 2)
+            vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten()).view(*pk.shape, -1)
+            msg = vals + torch.relu(layer.msg_edge(o_ji))  # (M, K, D): value of j plus its view o_ji of i
         agg = (attn.unsqueeze(-1) * msg).sum(1)
         z = layer.norm1(d.x_in.reshape(-1, d.x_in.shape[-1]).index_select(0, rows) + layer.out(agg))
         return layer.norm2(z + layer.ffn2(torch.relu(layer.ffn1(z))))
