@@ -33,6 +33,7 @@ def main() -> None:
     ap.add_argument("--lr-final", type=float, default=3e-4)
     ap.add_argument("--clip", type=float, default=1.0)
     ap.add_argument("--gamma", type=float, default=1.0)
+    ap.add_argument("--step-per-bucket", action="store_true")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--json", default="")
@@ -43,8 +44,9 @@ def main() -> None:
     env = make_env(TASKS[a.task])
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(dev)
     spec = FitSpec(rollouts=a.rollouts, batch=a.batch, horizon=env.horizon, lr=a.lr, lr_final=a.lr_final,
-                   grad_clip=a.clip, gamma=a.gamma, checkpoint_every=10**9)
-    tag = f"{a.task} B={a.batch} lr={a.lr}->{a.lr_final} clip={a.clip} gamma={a.gamma}"
+                   grad_clip=a.clip, gamma=a.gamma, checkpoint_every=10**9,
+                   step_per_bucket=a.step_per_bucket)
+    tag = f"{a.task} B={a.batch} lr={a.lr}->{a.lr_final} clip={a.clip} gamma={a.gamma} per_bucket={a.step_per_bucket}"
     t0 = time.perf_counter()
 
     class Rep:

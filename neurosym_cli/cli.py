@@ -15,7 +15,7 @@ COMMANDS = {
     "retrain": "retrain",
     "show-program": "show_program",
 }
-AVAILABLE = {"train", "eval", "synth", "show-program"}
+AVAILABLE = set(COMMANDS)
 
 USAGE = """usage: neurosym <command> [hydra overrides] [hydra flags]
 
@@ -25,7 +25,7 @@ commands:
   train          train the transformer oracle (or a baseline's own model) by backprop through the dynamics
   eval           evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions
   synth          synthesize a communication program by MCMC (paper sections 3.2, 3.4)
-  retrain        retrain the transformer under a synthesized program   (not available yet)
+  retrain        fine-tune the oracle under a synthesized program (paper section 3.5)
   show-program   print a synthesized program in the paper's notation
 
 examples:
@@ -36,12 +36,14 @@ examples:
   neurosym synth -m rules=2,3,4,5 lam=0.3,0.5,0.7,1.0 hydra/launcher=joblib
   neurosym show-program task=random-grid rules=2
   neurosym eval task=random-grid baseline=prog rules=2
+  neurosym retrain task=random-grid rules=2 lam=0.5
+  neurosym eval task=random-grid baseline=prog-retrained rules=2
   neurosym train -m seed=0,1,2 hydra/launcher=joblib
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running
 
 tasks: random-cross, random-grid, unlabeled-goals, two-groups-cross
-baselines: tf-full, hard-attn, dist, no-comm, prog, det-prog
+baselines: tf-full, hard-attn, dist, no-comm, prog, det-prog, prog-retrained, det-prog-retrained
 budgets: paper, quick, tiny
 """
 

@@ -127,6 +127,8 @@ class OptimConfig:
     """max global gradient norm"""
     gamma: float = 1.0
     """discount of the per-step loss (reference 1.0; paper says < 1)"""
+    step_per_bucket: bool = False
+    """one Adam step per agent-count bucket of a batch (about 4 updates per batch on random-cross, same compute)"""
 
     def __post_init__(self) -> None:
         _check(self.lr > 0 and self.lr_final > 0, "optim.lr and optim.lr_final must be positive")
@@ -147,6 +149,8 @@ class BudgetConfig:
     """evaluation seeds; every seed re-seeds everything"""
     horizon: Optional[int] = None
     """override of the task horizon (tiny budgets only); null keeps the task's"""
+    retrain_rollouts: int = 1_000
+    """rollouts of retraining under the program (paper: 1k)"""
     synth_rollouts: int = 300
     """oracle rollouts in the synthesis dataset D (paper: 300)"""
     mcmc_steps: int = 10_000
@@ -161,6 +165,7 @@ class BudgetConfig:
         _check(self.batch_rollouts > 0, f"budget.batch_rollouts must be positive, got {self.batch_rollouts}")
         _check(self.eval_seeds > 0, f"budget.eval_seeds must be positive, got {self.eval_seeds}")
         _check(self.horizon is None or self.horizon > 0, "budget.horizon must be positive or null")
+        _check(self.retrain_rollouts > 0, f"budget.retrain_rollouts must be positive, got {self.retrain_rollouts}")
         _check(self.synth_rollouts > 0, f"budget.synth_rollouts must be positive, got {self.synth_rollouts}")
         _check(self.mcmc_steps > 0, f"budget.mcmc_steps must be positive, got {self.mcmc_steps}")
         _check(self.checkpoint_every > 0 and self.log_every > 0, "budget.checkpoint_every/log_every must be positive")
@@ -176,12 +181,15 @@ class BaselineConfig:
     det: bool = False
     """program baselines: no random rules (det-prog, paper appendix B)"""
     model: str = "oracle"
-    """which trained weights: oracle (shared by tf-full / hard-attn), or own (trained with this mask)"""
+    """which weights: oracle (tf-full, hard-attn, prog), own (trained with this mask: dist, no-comm),
+    retrained (the oracle fine-tuned under the program: prog-retrained, paper section 3.5)"""
     description: str = ""
 
     def __post_init__(self) -> None:
         _check(self.comm in ("full", "topk", "nearest", "none", "program"), f"baseline.comm: unknown provider {self.comm!r}")
-        _check(self.model in ("oracle", "own"), f"baseline.model must be oracle or own, got {self.model!r}")
+        _check(self.model in ("oracle", "own", "retrained"),
+               f"baseline.model must be oracle, own or retrained, got {self.model!r}")
+        _check(self.model != "retrained" or self.comm == "program", "a retrained baseline needs comm: program")
 
 
 @dataclass

@@ -17,6 +17,8 @@ def model_name(cfg: RunConfig) -> str:
     """Directory name of the weights a baseline uses: the shared oracle, or its own trained model."""
     if cfg.baseline.model == "oracle":
         return "oracle"
+    if cfg.baseline.model == "retrained":
+        return f"retrained-{program_tag(cfg)}"
     return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
 
 
@@ -60,10 +62,18 @@ def eval_dir(cfg: RunConfig) -> Path:
 
 def train_command(cfg: RunConfig, oracle: bool = False) -> str:
     """The command line that makes the weights ``cfg``'s baseline needs (or the oracle's)."""
+    if cfg.baseline.model == "retrained" and not oracle:
+        return retrain_command(cfg)
     own = cfg.baseline.model == "own" and not oracle
     base = cfg.baseline.name if own else "tf-full"
     k = f" rules={cfg.rules}" if own and cfg.baseline.comm != "none" else ""
     return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
+
+
+def retrain_command(cfg: RunConfig) -> str:
+    det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
+    return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
+            f" budget={cfg.budget.name} seed={cfg.seed}{det}")
 
 
 def synth_command(cfg: RunConfig) -> str:

@@ -31,6 +31,7 @@ class FitSpec:
     gamma: float = 1.0
     detach_state: bool = False
     checkpoint_every: int = 10
+    step_per_bucket: bool = False  # one Adam step per agent-count bucket instead of one per batch
 
     @property
     def steps(self) -> int:
@@ -86,17 +87,23 @@ def fit(
         for group in opt.param_groups:
             group["lr"] = spec.lr_at(state.step)
         opt.zero_grad(set_to_none=True)
-        # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory
-        total_cost, n_eps = 0.0, 0
+        # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory;
+        # with step_per_bucket each bucket also gets its own CLIP -> STEP (more updates for the same rollouts)
+        total_cost, n_eps, grad_norm = 0.0, 0, 0.0
         for bucket in env.reset(batch, gen):
             traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
-            loss = (traj.cost * discount[:, None]).sum() / (batch * spec.horizon)
+            denom = bucket.batch if spec.step_per_bucket else batch
+            loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())
             n_eps += bucket.batch
-        # CLIP -> STEP
-        grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
-        opt.step()
+            if spec.step_per_bucket:
+                grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
+                opt.step()
+                opt.zero_grad(set_to_none=True)
+        if not spec.step_per_bucket:  # CLIP -> STEP once for the whole batch
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
+            opt.step()
         state.step += 1
         # LOG
         metrics = {"step": state.step, "rollouts": min(state.step * spec.batch, spec.rollouts),

@@ -21,11 +21,11 @@ from ._run import Context
 _COMPAT = ("task", "model", "optim")
 
 
-def fit_spec(cfg: RunConfig) -> FitSpec:
+def fit_spec(cfg: RunConfig, rollouts: int) -> FitSpec:
     o, b = cfg.optim, cfg.budget
-    return FitSpec(rollouts=b.train_rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=o.lr,
+    return FitSpec(rollouts=rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=o.lr,
                    lr_final=o.lr_final, grad_clip=o.grad_clip, gamma=o.gamma, detach_state=cfg.task.detach_state,
-                   checkpoint_every=b.checkpoint_every)
+                   checkpoint_every=b.checkpoint_every, step_per_bucket=o.step_per_bucket)
 
 
 def _check_compatible(saved: dict, current: dict, path) -> None:
@@ -36,14 +36,24 @@ def _check_compatible(saved: dict, current: dict, path) -> None:
 
 
 def run(cfg: RunConfig, ctx: Context) -> dict:
-    device = resolve_device(cfg.device)
-    seed_everything(cfg.seed)
+    if cfg.baseline.model == "retrained":
+        raise ConfigError(f"{cfg.baseline.name} is made by `neurosym retrain`, not `neurosym train`")
     if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_env(cfg.task, cfg.horizon)
     # the oracle trains with full soft attention; dist and no-comm train with their own mask
     comm = make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules)
-    spec = fit_spec(cfg)
+    return train_model(cfg, ctx, env, comm, cfg.budget.train_rollouts,
+                       lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
+
+
+def train_model(cfg: RunConfig, ctx: Context, env, comm, rollouts: int, init, verb: str) -> dict:
+    """The one training procedure of `train` and `retrain`: resume or start from ``init()``, fit, save.
+
+    Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json."""
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    spec = fit_spec(cfg, rollouts)
     out = paths.train_dir(cfg)
     ckpt = out / "model.pt"
     run_cfg = ctx.config_dict()
@@ -59,7 +69,7 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
     else:
-        policy = CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)
+        policy = init()
     policy.to(device)
 
     def save(st: FitState) -> None:
@@ -69,7 +79,7 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         artifacts.save_checkpoint(ckpt, payload)
         artifacts.write_csv(out / "history.csv", st.history)
 
-    label = f"train {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
+    label = f"{verb} {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
              spec.horizon, device, out)
     t0 = time.perf_counter()
@@ -80,13 +90,13 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     rollouts = (state.step - steps_before) * spec.batch
     final = sum(h["loss"] for h in state.history[-5:]) / len(state.history[-5:])
     artifacts.write_json(out / "manifest.json", {
-        "command": "train", "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
+        "command": verb, "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
         "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss_last5": final,
         "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
         "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
         "hydra_dir": ctx.hydra_dir, "config": run_cfg,
     })
-    console.print(f"[green]trained[/] {label}: loss {final:.3f} (mean of last 5 steps), "
+    console.print(f"[green]done[/] {label}: loss {final:.3f} (mean of last 5 steps), "
                   f"{rollouts} rollouts in {seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
     return {"checkpoint": str(ckpt), "steps": state.step, "loss": final}
 
