@@ -200,3 +200,15 @@ def test_synth_before_train_names_the_command(tmp_path):
     assert "neurosym train task=random-grid baseline=tf-full budget=tiny seed=0" in p.stderr
     p = run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_retrain_smoke(tmp_path):
+    run(["train", "task=random-grid", "budget=tiny"], tmp_path)
+    p = run(["retrain", "task=random-grid", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0 and "neurosym synth task=random-grid" in p.stderr  # needs the program first
+    run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    run(["retrain", "task=random-grid", "budget=tiny"], tmp_path)
+    assert (tmp_path / "random-grid/tiny/seed0/train/retrained-k2-lam0.5-v1/model.pt").exists()
+    run(["eval", "task=random-grid", "budget=tiny", "baseline=prog-retrained"], tmp_path)
+    m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1/metrics.json").read_text())
+    assert m["summary"]["max_in"]["mean"] <= 2.0
