@@ -127,8 +127,9 @@ class OptimConfig:
     """max global gradient norm"""
     gamma: float = 1.0
     """discount of the per-step loss (reference 1.0; paper says < 1)"""
-    step_per_bucket: bool = False
-    """one Adam step per agent-count bucket of a batch (about 4 updates per batch on random-cross, same compute)"""
+    step_per_bucket: bool = True
+    """one Adam step per agent-count bucket of a batch (about 4 updates per batch on random-cross, same compute;
+    tasks with one agent count per batch, grid and unlabeled, get one step per batch either way)"""
 
     def __post_init__(self) -> None:
         _check(self.lr > 0 and self.lr_final > 0, "optim.lr and optim.lr_final must be positive")

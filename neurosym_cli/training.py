@@ -31,7 +31,7 @@ class FitSpec:
     gamma: float = 1.0
     detach_state: bool = False
     checkpoint_every: int = 10
-    step_per_bucket: bool = False  # one Adam step per agent-count bucket instead of one per batch
+    step_per_bucket: bool = True  # one Adam step per agent-count bucket instead of one per batch
 
     @property
     def steps(self) -> int:
