@@ -162,8 +162,11 @@ def test_synth_show_program_eval_smoke(tmp_path):
     run(["synth", "task=random-grid", "budget=tiny", "baseline=det-prog"], tmp_path)
     det = parse((tmp_path / "random-grid/tiny/seed0/synth/det-k2-lam0.5-v1/program.txt").read_text())
     assert det.deterministic
-    # same seed, same program, byte for byte (the dataset is reused, the search re-run)
-    run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    # an existing program is reused; overwrite=true searches again: same seed, same program, byte for byte
+    p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    assert "already synthesized" in p.stdout
+    (out / "program.txt").write_text("# stale\n" + text)
+    run(["synth", "task=random-grid", "budget=tiny", "overwrite=true"], tmp_path)
     assert (out / "program.txt").read_text() == text
 
 

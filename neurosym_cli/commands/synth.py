@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import time
 
 import torch
@@ -20,21 +21,32 @@ from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_eve
 from ._run import Context
 
 
+def _fingerprint(policy) -> str:
+    """Identifies the oracle's weights, so a dataset collected from other weights is never reused."""
+    h = hashlib.sha1()
+    for k, v in sorted(policy.state_dict().items()):
+        h.update(k.encode())
+        h.update(v.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()
+
+
 def _dataset(cfg: RunConfig, env, policy, device):
     """The oracle dataset D, collected once per (oracle, rollouts, stride) and reused by every sweep job."""
     path = paths.dataset_file(cfg)
-    if path.exists() and not cfg.overwrite:
+    oracle = _fingerprint(policy)
+    if path.exists():
         try:
             payload = torch.load(path, map_location="cpu", weights_only=True)
-            if payload.get("format") == "neurosym-dataset/1":
+            if payload.get("format") == "neurosym-dataset/1" and payload.get("oracle") == oracle:
                 log.info("reusing the dataset %s", path)
                 return from_payload(payload)
+            log.info("the dataset %s came from other oracle weights; collecting it again", path)
         except Exception:
             log.warning("unreadable dataset %s; collecting it again", path)
     t0 = time.perf_counter()
     data = collect(env, policy, cfg.budget.synth_rollouts, cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA),
                    device)
-    artifacts.save_checkpoint(path, to_payload(data))
+    artifacts.save_checkpoint(path, {**to_payload(data), "oracle": oracle})
     pairs = sum(b.states * b.n_agents ** 2 for b in data)
     log.info("collected D: %d rollouts, %d states, %.1fM agent pairs in %.0f s -> %s", cfg.budget.synth_rollouts,
              sum(b.states for b in data), pairs / 1e6, time.perf_counter() - t0, path)
@@ -44,13 +56,16 @@ def _dataset(cfg: RunConfig, env, policy, device):
 def run(cfg: RunConfig, ctx: Context) -> dict:
     if cfg.baseline.comm != "program":
         raise ConfigError(f"synth makes programs for baseline=prog or baseline=det-prog, not {cfg.baseline.name}")
+    out = paths.synth_dir(cfg)
+    if (out / "program.txt").exists() and (out / "summary.json").exists() and not cfg.overwrite:
+        log.info("already synthesized: %s (overwrite=true searches again)", out / "program.txt")
+        return {"program": str(out / "program.txt")}
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
     policy = artifacts.policy_from_payload(payload).to(device).eval()
     env = make_env(cfg.task, cfg.horizon)
     data = _dataset(cfg, env, policy, device)
-    out = paths.synth_dir(cfg)
     spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
                      cfg.rules, cfg.synth.max_depth, cfg.baseline.det)
     results, trace, rounds = [], [], []
