@@ -14,6 +14,7 @@ COMMANDS = {
     "synth": "synth",
     "retrain": "retrain",
     "show-program": "show_program",
+    "pipeline": "pipeline",
 }
 AVAILABLE = set(COMMANDS)
 
@@ -27,8 +28,11 @@ commands:
   synth          synthesize a communication program by MCMC (paper sections 3.2, 3.4)
   retrain        fine-tune the oracle under a synthesized program (paper section 3.5)
   show-program   print a synthesized program in the paper's notation
+  pipeline       every stage for every baseline (train, synth, retrain, eval), then the results table
 
 examples:
+  neurosym pipeline task=random-grid                 # the whole method and its baselines, quick budget
+  neurosym pipeline -m seed=0,1,2 budget=paper       # per-seed pipelines at the paper's budget
   neurosym train task=random-cross budget=quick
   neurosym train task=random-grid baseline=dist
   neurosym eval task=random-cross baseline=hard-attn

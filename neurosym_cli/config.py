@@ -250,6 +250,9 @@ class RunConfig:
     """start over instead of resuming from an existing checkpoint"""
     progress: str = "auto"
     """auto (rich bar on a terminal, log lines otherwise), rich, plain"""
+    baselines: list[str] = field(default_factory=lambda: [
+        "tf-full", "hard-attn", "dist", "no-comm", "prog", "prog-retrained"])
+    """pipeline: the baselines to make and evaluate, in order"""
     task: TaskConfig = field(default_factory=TaskConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
     optim: OptimConfig = field(default_factory=OptimConfig)

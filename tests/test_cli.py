@@ -215,3 +215,14 @@ def test_retrain_smoke(tmp_path):
     run(["eval", "task=random-grid", "budget=tiny", "baseline=prog-retrained"], tmp_path)
     m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1/metrics.json").read_text())
     assert m["summary"]["max_in"]["mean"] <= 2.0
+
+
+def test_pipeline_tiny_reuses_artifacts(tmp_path):
+    p = run(["pipeline", "task=random-grid", "budget=tiny", "baselines=[tf-full,dist,prog,prog-retrained]"], tmp_path)
+    assert "pipeline done" in p.stdout
+    exp = tmp_path / "random-grid/tiny/seed0"
+    for label in ("tf-full", "dist-k2", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1"):
+        assert (exp / "eval" / label / "metrics.json").exists(), label
+    assert (exp / "eval/figure2.png").stat().st_size > 1000
+    p = run(["pipeline", "task=random-grid", "budget=tiny", "baselines=[tf-full,dist,prog,prog-retrained]"], tmp_path)
+    assert p.stdout.count("already trained") == 3 and "already synthesized" in p.stdout

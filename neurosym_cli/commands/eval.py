@@ -53,13 +53,28 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         "config": ctx.config_dict(),
     })
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
-    table = collect(Path(cfg.exp_dir))
-    title = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): mean ± std over {len(seeds)} eval seeds"
-    png = figure2(table, title.replace(": ", ":\n"), Path(cfg.exp_dir) / "eval" / "figure2.png")
-    if not ctx.multirun:
-        console.print(metrics_table(title, table, COLUMNS))
-        console.print(f"plot of every baseline evaluated here: {png}")
+    if ctx.multirun:
+        write_figure(cfg)
+    else:
+        print_table(cfg)
     return summary
+
+
+def _title(cfg: RunConfig) -> str:
+    return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
+            f"mean ± std over {cfg.budget.eval_seeds} eval seeds")
+
+
+def write_figure(cfg: RunConfig) -> Path:
+    """Figure-2-style PNG of every baseline evaluated in this experiment directory."""
+    return figure2(collect(Path(cfg.exp_dir)), _title(cfg).replace(": ", ":\n"), Path(cfg.exp_dir) / "eval" / "figure2.png")
+
+
+def print_table(cfg: RunConfig) -> None:
+    """The results table of every baseline evaluated in this experiment directory, and its plot."""
+    png = write_figure(cfg)
+    console.print(metrics_table(_title(cfg), collect(Path(cfg.exp_dir)), COLUMNS))
+    console.print(f"plot of every baseline evaluated here: {png}")
 
 
 ORDER = ["tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
