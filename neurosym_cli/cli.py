@@ -15,6 +15,7 @@ COMMANDS = {
     "retrain": "retrain",
     "show-program": "show_program",
     "pipeline": "pipeline",
+    "report": "report",
 }
 AVAILABLE = set(COMMANDS)
 
@@ -29,10 +30,12 @@ commands:
   retrain        fine-tune the oracle under a synthesized program (paper section 3.5)
   show-program   print a synthesized program in the paper's notation
   pipeline       every stage for every baseline (train, synth, retrain, eval), then the results table
+  report         one table and plot over every training seed of a task and budget
 
 examples:
   neurosym pipeline task=random-grid                 # the whole method and its baselines, quick budget
   neurosym pipeline -m seed=0,1,2 budget=paper       # per-seed pipelines at the paper's budget
+  neurosym report budget=paper                       # mean ± std over those seeds, with a plot
   neurosym train task=random-cross budget=quick
   neurosym train task=random-grid baseline=dist
   neurosym eval task=random-cross baseline=hard-attn

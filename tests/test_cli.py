@@ -226,3 +226,16 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
     assert (exp / "eval/figure2.png").stat().st_size > 1000
     p = run(["pipeline", "task=random-grid", "budget=tiny", "baselines=[tf-full,dist,prog,prog-retrained]"], tmp_path)
     assert p.stdout.count("already trained") == 3 and "already synthesized" in p.stdout
+
+
+def test_per_seed_pipelines_and_report(tmp_path):
+    run(["pipeline", "-m", "seed=0,1", "task=random-grid", "budget=tiny", "baselines=[tf-full,prog]"], tmp_path)
+    p = run(["report", "task=random-grid", "budget=tiny"], tmp_path)
+    assert "2 training seed(s)" in p.stdout
+    rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
+    assert set(rep["baselines"]) == {"tf-full", "prog-k2-lam0.5-v1"}
+    assert rep["baselines"]["tf-full"]["cost"]["train_seeds"] == 2
+    assert (tmp_path / "random-grid/tiny/report.png").stat().st_size > 1000
+    assert (tmp_path / "random-grid/tiny/report.csv").read_text().startswith("baseline,cost_mean,cost_std")
+    p = run(["report", "task=random-cross", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0 and "neurosym pipeline task=random-cross" in p.stderr

@@ -30,4 +30,4 @@ def _make(name: str):
     return app
 
 
-APPS = {n: _make(n) for n in ("train", "eval", "synth", "retrain", "show_program", "pipeline")}
+APPS = {n: _make(n) for n in ("train", "eval", "synth", "retrain", "show_program", "pipeline", "report")}
