@@ -178,7 +178,7 @@ class BaselineConfig:
 
     name: str = MISSING
     comm: str = "full"
-    """communication provider: full, topk (hard-attn), nearest (dist), none (no-comm), program (prog)"""
+    """communication provider: full, topk (hard-attn), nearest (dist), none (no-comm), program (prog), tree (dt)"""
     det: bool = False
     """program baselines: no random rules (det-prog, paper appendix B)"""
     model: str = "oracle"
@@ -187,10 +187,12 @@ class BaselineConfig:
     description: str = ""
 
     def __post_init__(self) -> None:
-        _check(self.comm in ("full", "topk", "nearest", "none", "program"), f"baseline.comm: unknown provider {self.comm!r}")
+        _check(self.comm in ("full", "topk", "nearest", "none", "program", "tree"),
+               f"baseline.comm: unknown provider {self.comm!r}")
         _check(self.model in ("oracle", "own", "retrained"),
                f"baseline.model must be oracle, own or retrained, got {self.model!r}")
-        _check(self.model != "retrained" or self.comm == "program", "a retrained baseline needs comm: program")
+        _check(self.model != "retrained" or self.comm in ("program", "tree"),
+               "a retrained baseline needs comm: program or tree")
 
 
 @dataclass

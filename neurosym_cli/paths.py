@@ -23,7 +23,9 @@ def model_name(cfg: RunConfig) -> str:
 
 
 def program_tag(cfg: RunConfig) -> str:
-    """Name of one synthesis result: K, lambda, feature map, and det- for argmax-only programs."""
+    """Name of one synthesis result: K, lambda, feature map, and det- for argmax-only programs (dt: K, features)."""
+    if cfg.baseline.comm == "tree":
+        return f"dt-k{cfg.rules}-{cfg.features}"
     return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
 
 
@@ -33,6 +35,8 @@ def baseline_label(cfg: RunConfig) -> str:
         return cfg.baseline.name
     if cfg.baseline.comm == "program":
         return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
+    if cfg.baseline.comm == "tree":
+        return f"{cfg.baseline.name}-k{cfg.rules}-{cfg.features}"
     return f"{cfg.baseline.name}-k{cfg.rules}"
 
 
@@ -50,6 +54,10 @@ def synth_dir(cfg: RunConfig) -> Path:
 
 def program_file(cfg: RunConfig) -> Path:
     return Path(cfg.program) if cfg.program else synth_dir(cfg) / "program.txt"
+
+
+def tree_file(cfg: RunConfig) -> Path:
+    return synth_dir(cfg) / "tree.json"
 
 
 def dataset_file(cfg: RunConfig) -> Path:
@@ -72,11 +80,13 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
 
 def retrain_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
+    det = " baseline=dt-retrained" if cfg.baseline.comm == "tree" else det
     return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}")
 
 
 def synth_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog" if cfg.baseline.det else ""
+    det = " baseline=dt" if cfg.baseline.comm == "tree" else det
     return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}")

@@ -218,14 +218,16 @@ def test_retrain_smoke(tmp_path):
 
 
 def test_pipeline_tiny_reuses_artifacts(tmp_path):
-    p = run(["pipeline", "task=random-grid", "budget=tiny", "baselines=[tf-full,dist,prog,prog-retrained]"], tmp_path)
+    base = "baselines=[tf-full,dist,prog,prog-retrained,dt,dt-retrained]"
+    p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path)
     assert "pipeline done" in p.stdout
     exp = tmp_path / "random-grid/tiny/seed0"
-    for label in ("tf-full", "dist-k2", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1"):
+    for label in ("tf-full", "dist-k2", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1", "dt-k2-v1",
+                  "dt-retrained-k2-v1"):
         assert (exp / "eval" / label / "metrics.json").exists(), label
     assert (exp / "eval/figure2.png").stat().st_size > 1000
-    p = run(["pipeline", "task=random-grid", "budget=tiny", "baselines=[tf-full,dist,prog,prog-retrained]"], tmp_path)
-    assert p.stdout.count("already trained") == 3 and "already synthesized" in p.stdout
+    p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path)
+    assert p.stdout.count("already trained") == 4 and p.stdout.count("already synthesized") == 2
 
 
 def test_per_seed_pipelines_and_report(tmp_path):

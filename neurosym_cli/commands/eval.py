@@ -6,16 +6,14 @@ import time
 from pathlib import Path
 
 from .. import __version__, artifacts, paths
-from ..config import ConfigError, RunConfig
+from ..config import RunConfig
 from ..envs import make_env
 from ..evaluation import evaluate, summarize
 from ..plotting import figure2
-from ..policy import make_comm
-from ..policy.comm import ProgramComm
-from ..utils.io import load_program
 from ..utils.console import console, log, metrics_table
 from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
+from ._comm import baseline_comm
 from ._run import Context
 
 COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
@@ -31,13 +29,7 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
                     payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
     env = make_env(cfg.task, cfg.horizon)
-    if cfg.baseline.comm == "program":
-        program = load_program(paths.program_file(cfg), paths.synth_command(cfg))
-        if program.n_rounds != cfg.task.rounds:
-            raise ConfigError(f"the program has {program.n_rounds} round(s), the task {cfg.task.rounds}")
-        comm = ProgramComm(program, cfg.task.kind, cfg.features)
-    else:
-        comm = make_comm(cfg.baseline.comm, cfg.rules)
+    comm = baseline_comm(cfg)
     seeds = list(range(cfg.budget.eval_seeds))
     t0 = time.perf_counter()
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)

@@ -43,6 +43,8 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
             need("train", b)
         if stage_cfg.baseline.comm == "program":
             need("synth", "det-prog" if stage_cfg.baseline.det else "prog")
+        if stage_cfg.baseline.comm == "tree":
+            need("synth", "dt")
         if model == "retrained":
             need("retrain", b)
     plan += [("eval", b) for b in cfg.baselines]

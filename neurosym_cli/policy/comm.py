@@ -108,6 +108,20 @@ class ProgramComm:
         return program_mask(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
 
 
+class TreeComm:
+    """dt: a decision tree per round decides, pair by pair, whom each agent hears (paper appendix B); no cap on
+    the degrees at run time."""
+
+    name = "tree"
+
+    def __init__(self, trees: list, kind: str, features: str = "v1"):
+        self.trees, self.kind, self.features = trees, kind, features
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        feats = PairFeatures(self.kind, ctx.obs.agent, ctx.obs.rel, self.features)
+        return self.trees[min(round, len(self.trees) - 1)].predict(feats) & _others(logits)
+
+
 def make_comm(kind: str, k: int) -> CommProvider:
     """Provider by name (``baseline.comm``); k = rules for the degree-limited ones."""
     if kind == "full":
