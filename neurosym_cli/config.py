@@ -120,8 +120,8 @@ class OptimConfig:
     """Batched BPTT optimisation (decisions.md 'Training': chosen by what trains best)."""
 
     lr: float = 1e-2
-    """Adam learning rate at the start (cosine decay to lr_final); tuned in docs/performance.md"""
-    lr_final: float = 1e-3
+    """Adam learning rate at the start (cosine decay to lr_final); chosen by the sweep in docs/performance.md"""
+    lr_final: float = 2e-4
     """learning rate at the end of the budget (cosine decay); equal to lr for a constant rate"""
     grad_clip: float = 1.0
     """max global gradient norm"""

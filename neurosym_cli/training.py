@@ -26,7 +26,7 @@ class FitSpec:
     batch: int  # rollouts per optimizer step
     horizon: int  # T
     lr: float = 1e-2
-    lr_final: float = 1e-3
+    lr_final: float = 2e-4
     grad_clip: float = 1.0
     gamma: float = 1.0
     detach_state: bool = False
