@@ -253,7 +253,8 @@ class RunConfig:
     progress: str = "auto"
     """auto (rich bar on a terminal, log lines otherwise), rich, plain"""
     baselines: list[str] = field(default_factory=lambda: [
-        "tf-full", "hard-attn", "dist", "no-comm", "prog", "prog-retrained"])
+        "tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
+        "dt-retrained", "no-comm"])
     """pipeline: the baselines to make and evaluate, in order"""
     task: TaskConfig = field(default_factory=TaskConfig)
     model: ModelConfig = field(default_factory=ModelConfig)
