@@ -127,12 +127,14 @@ class OptimConfig:
     """max global gradient norm"""
     gamma: float = 1.0
     """discount of the per-step loss (reference 1.0; paper says < 1)"""
+    retrain_lr: float = 1e-3
+    """Adam learning rate at the start of retraining (fine-tuning a trained oracle wants a smaller step)"""
     step_per_bucket: bool = True
     """one Adam step per agent-count bucket of a batch (about 4 updates per batch on random-cross, same compute;
     tasks with one agent count per batch, grid and unlabeled, get one step per batch either way)"""
 
     def __post_init__(self) -> None:
-        _check(self.lr > 0 and self.lr_final > 0, "optim.lr and optim.lr_final must be positive")
+        _check(self.lr > 0 and self.lr_final > 0 and self.retrain_lr > 0, "optim learning rates must be positive")
         _check(self.grad_clip > 0, "optim.grad_clip must be positive")
         _check(0.0 < self.gamma <= 1.0, "optim.gamma must lie in (0, 1]")
 

@@ -19,4 +19,4 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     env = make_env(cfg.task, cfg.horizon)
     # all weights are trained (attention included); random rules draw from the training generator every step
     return train_model(cfg, ctx, env, comm, cfg.budget.retrain_rollouts,
-                       lambda: artifacts.policy_from_payload(payload), "retrain")
+                       lambda: artifacts.policy_from_payload(payload), "retrain", cfg.optim.retrain_lr)

@@ -21,10 +21,10 @@ from ._run import Context
 _COMPAT = ("task", "model", "optim")
 
 
-def fit_spec(cfg: RunConfig, rollouts: int) -> FitSpec:
+def fit_spec(cfg: RunConfig, rollouts: int, lr: float) -> FitSpec:
     o, b = cfg.optim, cfg.budget
-    return FitSpec(rollouts=rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=o.lr,
-                   lr_final=o.lr_final, grad_clip=o.grad_clip, gamma=o.gamma, detach_state=cfg.task.detach_state,
+    return FitSpec(rollouts=rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=lr,
+                   lr_final=min(o.lr_final, lr), grad_clip=o.grad_clip, gamma=o.gamma, detach_state=cfg.task.detach_state,
                    checkpoint_every=b.checkpoint_every, step_per_bucket=o.step_per_bucket)
 
 
@@ -44,16 +44,17 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     # the oracle trains with full soft attention; dist and no-comm train with their own mask
     comm = make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules)
     return train_model(cfg, ctx, env, comm, cfg.budget.train_rollouts,
-                       lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
+                       lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train",
+                       cfg.optim.lr)
 
 
-def train_model(cfg: RunConfig, ctx: Context, env, comm, rollouts: int, init, verb: str) -> dict:
+def train_model(cfg: RunConfig, ctx: Context, env, comm, rollouts: int, init, verb: str, lr: float) -> dict:
     """The one training procedure of `train` and `retrain`: resume or start from ``init()``, fit, save.
 
     Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
-    spec = fit_spec(cfg, rollouts)
+    spec = fit_spec(cfg, rollouts, lr)
     out = paths.train_dir(cfg)
     ckpt = out / "model.pt"
     run_cfg = ctx.config_dict()
