@@ -73,7 +73,10 @@ def test_resume_extend_and_already_done(tmp_path):
 def test_interrupted_train_resumes(tmp_path):
     env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path)}
     args = [*neurosym_cmd(), "train", "task=two-groups-cross", "budget=tiny", "budget.train_rollouts=4000"]
-    proc = subprocess.Popen(args, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # a shell may start background jobs with SIGINT ignored, and Python keeps that; restore the default
+    restore = lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)  # noqa: E731
+    proc = subprocess.Popen(args, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=restore)
     ckpt = tmp_path / "two-groups-cross/tiny/seed0/train/oracle/model.pt"
     deadline = time.time() + 120
     while not ckpt.exists() and time.time() < deadline:
