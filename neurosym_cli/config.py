@@ -243,6 +243,8 @@ class RunConfig:
     """program feature map: v1 (vectors, norms, angles) or v2 (plus quadratic terms)"""
     program: str = ""
     """show-program: path of a program file (empty: the one synth wrote for this config)"""
+    report_dir: str = ""
+    """report: a directory to aggregate (empty: <runs_root>/<task>/<budget>)"""
     device: str = "auto"
     """auto (GPU when present), cpu, cuda"""
     threads: int = 0

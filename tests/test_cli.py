@@ -237,6 +237,8 @@ def test_per_seed_pipelines_and_report(tmp_path):
     run(["pipeline", "-m", "seed=0,1", "task=random-grid", "budget=tiny", "baselines=[tf-full,prog]"], tmp_path)
     p = run(["report", "task=random-grid", "budget=tiny"], tmp_path)
     assert "2 training seed(s)" in p.stdout
+    p = run(["report", f"report_dir={tmp_path / 'random-grid/tiny/seed1'}"], tmp_path)
+    assert "1 training seed(s)" in p.stdout and (tmp_path / "random-grid/tiny/seed1/report.png").exists()
     rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
     assert set(rep["baselines"]) == {"tf-full", "prog-k2-lam0.5-v1"}
     assert rep["baselines"]["tf-full"]["cost"]["train_seeds"] == 2

@@ -1,6 +1,7 @@
 """`neurosym report`: aggregate the evaluations of every training seed of a (task, budget) into one table.
 
-Reads <runs_root>/<task>/<budget>/seed*/eval/*/metrics.json. For each baseline: the mean over training seeds of
+Reads <runs_root>/<task>/<budget>/seed*/eval/*/metrics.json, or any directory given as report_dir=PATH (a
+directory of seed directories, or one experiment directory). For each baseline: the mean over training seeds of
 each metric (each itself a mean over the evaluation seeds) and the spread across training seeds; with a single
 training seed, the spread over its evaluation seeds. Writes report.json, report.csv and report.png next to the
 seed directories, and prints the table.
@@ -24,8 +25,9 @@ def aggregate(root: Path) -> tuple[list[tuple[str, dict]], list[str]]:
     """(label, summary) per baseline over the seed directories under ``root``, and the seeds found."""
     by_label: dict[str, list[dict]] = {}
     names: dict[str, str] = {}
-    seeds = sorted({p.name for p in root.glob("seed*") if p.is_dir()})
-    for f in sorted(root.glob("seed*/eval/*/metrics.json")):
+    files = sorted(root.glob("seed*/eval/*/metrics.json")) or sorted(root.glob("eval/*/metrics.json"))
+    seeds = sorted({f.parents[2].name for f in files})
+    for f in files:
         m = read_json(f)
         by_label.setdefault(m["label"], []).append(m["summary"])
         names[m["label"]] = m["baseline"]
@@ -44,14 +46,15 @@ def aggregate(root: Path) -> tuple[list[tuple[str, dict]], list[str]]:
 
 
 def run(cfg: RunConfig, ctx: Context) -> dict:
-    root = Path(cfg.runs_root) / cfg.task.name / cfg.budget.name
+    root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.runs_root) / cfg.task.name / cfg.budget.name
     rows, seeds = aggregate(root)
     if not rows:
         raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
                             f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
     n = max(r[1]["cost"]["train_seeds"] for r in rows)
     spread = "std over training seeds" if n > 1 else "std over evaluation seeds (one training seed)"
-    title = f"{cfg.task.name} ({cfg.budget.name} budget, {len(seeds)} training seed(s)): mean ± {spread}"
+    where = str(root) if cfg.report_dir else f"{cfg.task.name} ({cfg.budget.name} budget)"
+    title = f"{where}, {len(seeds)} training seed(s): mean ± {spread}"
     write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
                                       "baselines": {label: s for label, s in rows}})
     write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
