@@ -108,12 +108,3 @@ def rule_features(r: Rule) -> set[str]:
     if isinstance(r, ArgMaxRule):
         out |= set(r.score.features())
     return out
-
-
-def cond_depth(c: Cond) -> int:
-    """0 for true, 1 for a test, 1 + max child depth for and/or."""
-    if isinstance(c, TrueCond):
-        return 0
-    if isinstance(c, Test):
-        return 1
-    return 1 + max(cond_depth(c.left), cond_depth(c.right))

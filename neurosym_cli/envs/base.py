@@ -84,10 +84,6 @@ class Rng:
             seed = int(torch.randint(0, 2**62, (1,), generator=gens))
             self._device_gen = torch.Generator(device=self.device).manual_seed(seed)
 
-    @property
-    def per_episode(self) -> bool:
-        return not isinstance(self.gens, torch.Generator)
-
     def _draw(self, fn, batch: int, shape: tuple[int, ...]) -> Tensor:
         if self._device_gen is not None:
             return fn((batch, *shape), generator=self._device_gen, device=self.device)
@@ -104,11 +100,6 @@ class Rng:
 
     def rand(self, batch: int, *shape: int) -> Tensor:
         return self._draw(torch.rand, batch, shape)
-
-    def subset(self, index: Sequence[int]) -> "Rng":
-        if isinstance(self.gens, torch.Generator):
-            return self
-        return Rng([self.gens[i] for i in index], self.device)
 
 
 class MultiAgentEnv(Protocol):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-import sys
 import time
 from typing import Mapping, Sequence
 
@@ -76,12 +75,6 @@ def metrics_table(title: str, rows: Sequence[tuple[str, Mapping[str, Mapping[str
             f"{summary[m]['mean']:.3f} ± {summary[m]['std']:.3f}" if m in summary else "-" for m, _ in columns
         ))
     return table
-
-
-def fail(msg: str) -> None:
-    """Print a one-line error and exit non-zero (no traceback)."""
-    print(f"neurosym: error: {msg}", file=sys.stderr)
-    raise SystemExit(1)
 
 
 class SearchDisplay:
