@@ -146,3 +146,13 @@ def test_tree_json_round_trip_and_torch_prediction_match_sklearn():
     assert again == tree
     pred = again.predict(feats)
     assert (pred == y).float().mean() > 0.99
+
+
+def test_single_leaf_tree_predicts_its_class():
+    from neurosym_cli.envs.features import PairFeatures
+    from neurosym_cli.synth.tree import TreeModel
+
+    feats = PairFeatures("formation", torch.zeros(2, 3, 2), torch.randn(2, 3, 3, 2), "v1")
+    for label in (True, False):
+        tree = TreeModel(["d"], [-1], [-1], [-2], [-2.0], [label])
+        assert (tree.predict(feats) == label).all()

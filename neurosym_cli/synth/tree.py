@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass
+from functools import cached_property
 
 import torch
 from torch import Tensor
@@ -74,21 +75,27 @@ class TreeModel:
         except (ValueError, KeyError, TypeError) as e:
             raise UserError(f"malformed tree file: {e}") from None
 
+    @cached_property
+    def _arrays(self) -> tuple[Tensor, Tensor, Tensor, Tensor, Tensor]:
+        """The node arrays as tensors, built once (trees have thousands of nodes; predict runs every step)."""
+        return (torch.tensor(self.left), torch.tensor(self.right), torch.tensor(self.feature).clamp(min=0),
+                torch.tensor(self.threshold, dtype=torch.float32), torch.tensor(self.label))
+
     def predict(self, feats: PairFeatures) -> Tensor:
         """(B, N, N) bool: the tree's decision for every pair (self removed by the caller's mask)."""
         b, n = feats.batch, feats.n_agents
-        cols = torch.stack([feats[f].expand(b, n, n) for f in self.features], -1)  # (B, N, N, F)
-        left, right = torch.tensor(self.left), torch.tensor(self.right)
-        feat, thr = torch.tensor(self.feature).clamp(min=0), torch.tensor(self.threshold, dtype=cols.dtype)
-        node = torch.zeros(b, n, n, dtype=torch.long)
-        for _ in range(len(self.left)):  # at most depth iterations do any work
-            leaf = left[node] < 0
-            if bool(leaf.all()):
-                break
-            x = cols.gather(-1, feat[node].unsqueeze(-1).to(cols.device)).squeeze(-1)
-            go_left = x <= thr[node].to(cols.device)
-            node = torch.where(leaf, node, torch.where(go_left, left[node], right[node]))
-        return torch.tensor(self.label)[node].to(cols.device)
+        dev = feats.device
+        left, right, feat, thr, label = (a.to(dev) for a in self._arrays)
+        cols = torch.stack([feats[f].expand(b, n, n) for f in self.features], -1).flatten(0, 2)  # (B N N, F)
+        node = torch.zeros(cols.shape[0], dtype=torch.long, device=dev)
+        active = torch.arange(cols.shape[0] if int(left[0]) >= 0 else 0, device=dev)  # pairs not yet at a leaf
+        while active.numel():
+            nd = node[active]
+            x = cols[active, feat[nd]]
+            nxt = torch.where(x <= thr[nd], left[nd], right[nd])
+            node[active] = nxt
+            active = active[left[nxt] >= 0]
+        return label[node].view(b, n, n)
 
 
 def fit_tree(x: Tensor, y: Tensor, names: list[str], depths: tuple[int, ...], seed: int) -> tuple[TreeModel, dict]:
