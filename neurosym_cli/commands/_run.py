@@ -27,7 +27,7 @@ class Context:
 
 
 def _error(name: str, msg: str, code: int = 1) -> None:
-    print(f"neurosym {name}: error: {msg}", file=sys.stderr)
+    print(f"neurosym {name.replace('_', '-')}: error: {msg}", file=sys.stderr)
     raise SystemExit(code)
 
 
