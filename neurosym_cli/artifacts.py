@@ -1,13 +1,7 @@
-"""The only module that knows file names and formats of run artifacts.
+"""Policy checkpoints: a self-describing format (weights, architecture, config, resume state).
 
-Layout of one experiment directory (``exp_dir`` = outputs/<task>/<budget>/seed<k>):
-    train/<model>/model.pt          checkpoint: weights, the model's own config, resume state
-    train/<model>/history.csv       one row per optimizer step
-    train/<model>/manifest.json     what made it (command, config, versions)
-    eval/<baseline>/metrics.json    summary (mean, std over seeds) plus per-seed rows and the config
-    eval/<baseline>/metrics.csv     per-seed rows
-Every write goes to a temporary file in the same directory and is renamed into place, so an interrupted run
-never leaves a half-written artifact. Checkpoints are loaded with ``weights_only=True`` (never unpickled).
+Where artifacts live is ``paths.py``; plain-text I/O (atomic writes, JSON, CSV, programs) is ``utils/io.py``,
+re-exported here. Checkpoints are written atomically and loaded with ``weights_only=True`` (never unpickled).
 """
 
 from __future__ import annotations

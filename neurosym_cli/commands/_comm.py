@@ -6,7 +6,7 @@ from .. import paths
 from ..config import ConfigError, RunConfig
 from ..policy import make_comm
 from ..policy.comm import CommProvider, ProgramComm, TreeComm
-from ..utils.io import ArtifactError, load_program
+from ..utils.io import ArtifactError, load_program, read_json
 
 
 def baseline_comm(cfg: RunConfig) -> CommProvider:
@@ -21,9 +21,7 @@ def baseline_comm(cfg: RunConfig) -> CommProvider:
         path = paths.tree_file(cfg)
         if not path.exists():
             raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
-        import json
-
-        rounds = [TreeModel.from_json(json.dumps(t)) for t in json.loads(path.read_text())["rounds"]]
+        rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
         return TreeComm(rounds, cfg.task.kind, cfg.features)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import json
 import time
 
 import torch
@@ -139,7 +138,7 @@ def _synth_trees(cfg: RunConfig, ctx: Context, policy, data, out) -> dict:
                        **info, "nodes": len(tree.left)})
         log.info("dt round %d: depth %d, validation accuracy %.3f, %d nodes", r + 1, info["depth"],
                  info["validation_accuracy"][info["depth"]], len(tree.left))
-    write_json(out / "tree.json", {"rounds": [json.loads(t.to_json()) for t in trees]})
+    write_json(out / "tree.json", {"rounds": [t.to_dict() for t in trees]})
     write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
                                       "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
                                       "config": ctx.config_dict()})

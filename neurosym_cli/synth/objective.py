@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
-from ..dsl.ast import Program, Rule
+from ..dsl.ast import Program, RandomRule, Rule
 from ..dsl.interpret import picks_to_mask, rule_picks
 from ..envs.base import MultiAgentEnv, Observation
 from ..envs.features import PairFeatures
@@ -129,7 +129,7 @@ class CachedScorer:
             return self.rule_cache[rule]
         out = []
         for d in self.data:
-            if type(rule).__name__ == "RandomRule":
+            if isinstance(rule, RandomRule):
                 ps = [rule_picks(rule, d.feats, _Uniforms(u)) for u in self._uniforms(d)]
             else:
                 ps = [rule_picks(rule, d.feats, None)]
@@ -235,7 +235,7 @@ class CachedScorer:
         l1_sum, deg_sum = 0.0, 0.0
         for d in self.data:
             for r in range(self.samples):
-                u = self._uniforms(d)[r] if d.uniforms or self._needs_uniforms(program) else None
+                u = None if program.deterministic else self._uniforms(d)[r]
                 for s0 in range(0, d.s, chunk):
                     sl = slice(s0, min(s0 + chunk, d.s))
                     obs = Observation(d.agent[sl], d.rel[sl])
@@ -257,7 +257,3 @@ class CachedScorer:
                     deg_sum += float(degree_term(pk, dedup_valid(pk), d.n, self.objective, self.cap).sum())
         norm = self.total_states * self.samples
         return Score(l1_sum / norm + self.lam * deg_sum / norm, l1_sum / norm, deg_sum / norm)
-
-    @staticmethod
-    def _needs_uniforms(program: Program) -> bool:
-        return not program.deterministic

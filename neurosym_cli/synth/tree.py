@@ -64,15 +64,24 @@ class TreeModel:
     threshold: list[float]
     label: list[bool]  # the predicted class at each node (used at leaves)
 
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(d: dict) -> "TreeModel":
+        try:
+            return TreeModel(d["features"], d["left"], d["right"], d["feature"], d["threshold"], d["label"])
+        except (KeyError, TypeError) as e:
+            raise UserError(f"malformed tree file: {e}") from None
+
     def to_json(self) -> str:
-        return json.dumps(asdict(self))
+        return json.dumps(self.to_dict())
 
     @staticmethod
     def from_json(text: str) -> "TreeModel":
         try:
-            d = json.loads(text)
-            return TreeModel(d["features"], d["left"], d["right"], d["feature"], d["threshold"], d["label"])
-        except (ValueError, KeyError, TypeError) as e:
+            return TreeModel.from_dict(json.loads(text))
+        except ValueError as e:
             raise UserError(f"malformed tree file: {e}") from None
 
     @cached_property
