@@ -6,12 +6,15 @@ reuses what exists (a trained model, a program) and resumes what was interrupted
 
 from __future__ import annotations
 
+import time
 from importlib.resources import files
+from pathlib import Path
 
 from omegaconf import OmegaConf
 
 from ..config import ConfigError, RunConfig
 from ..utils.console import console, log
+from ..utils.io import read_json, write_json
 from . import eval as eval_cmd
 from . import retrain as retrain_cmd
 from . import synth as synth_cmd
@@ -50,12 +53,21 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     plan += [("eval", b) for b in cfg.baselines]
     runners = {"train": train_cmd.run, "synth": synth_cmd.run, "retrain": retrain_cmd.run, "eval": eval_cmd.run}
     results = {}
+    # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
+    timing_file = Path(cfg.exp_dir) / "pipeline_timings.json"
+    timings = read_json(timing_file) if timing_file.exists() else {}
     for k, (cmd, b) in enumerate(plan, start=1):
         log.info("pipeline stage %d/%d: %s %s", k, len(plan), cmd, b)
         stage_cfg, stage_ctx = _stage(ctx, cmd, b)
         # stages print no intermediate tables; the pipeline prints the final one
         quiet = Context(stage_ctx.raw, True, stage_ctx.hydra_dir) if cmd == "eval" else stage_ctx
+        start = time.perf_counter()
         results[f"{cmd}:{b}"] = runners[cmd](stage_cfg, quiet)
+        took = time.perf_counter() - start
+        key = f"{cmd} {b}"
+        # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
+        timings[key] = round(took if cmd == "eval" else max(took, timings.get(key, 0.0)), 1)
+        write_json(timing_file, timings)
     final_cfg, final_ctx = _stage(ctx, "eval", cfg.baselines[-1])
     eval_cmd.print_table(final_cfg)
     console.print(f"[green]pipeline done[/]: {len(plan)} stages for {cfg.task.name} ({cfg.budget.name} budget, "

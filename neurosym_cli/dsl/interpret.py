@@ -62,7 +62,7 @@ def cond(c: Cond, feats: FeatureView) -> Tensor:
 def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor:
     """(B, N) long: the agent each agent i asks under rule r, or -1 when its filter passes nobody."""
     b, n = feats.batch, feats.n_agents
-    passing = cond(r.cond, feats) & ~torch.eye(n, dtype=torch.bool, device=feats.device)
+    passing = cond(r.cond, feats)  # (B, N, N) bool
     if isinstance(r, ArgMaxRule):
         score = linear(r.score, feats)
     elif isinstance(r, RandomRule):
@@ -71,8 +71,12 @@ def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor
         score = rng.rand(b, n, n)  # the argmax of iid uniforms over the passing agents is a uniform pick
     else:
         raise TypeError(f"not a rule: {r!r}")
-    pick = score.masked_fill(~passing, float("-inf")).argmax(-1)
-    return torch.where(passing.any(-1), pick, torch.full_like(pick, -1))
+    masked = score.masked_fill(~passing, float("-inf"))  # a new tensor: the diagonal may be written in place
+    masked.diagonal(dim1=-2, dim2=-1).fill_(float("-inf"))  # nobody asks itself
+    pick = masked.argmax(-1, keepdim=True)  # (B, N, 1)
+    # the filter passes somebody iff the argmax is finite (cheaper than any() over all pairs)
+    found = masked.gather(-1, pick).squeeze(-1) > float("-inf")
+    return torch.where(found, pick.squeeze(-1), -1)
 
 
 def picks_to_mask(picks: Tensor, n: int) -> Tensor:

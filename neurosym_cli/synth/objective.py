@@ -19,6 +19,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor
 
 from ..dsl.ast import Program, RandomRule, Rule
@@ -48,22 +49,36 @@ class _Uniforms:
 
 def dedup_valid(picks: Tensor) -> Tensor:
     """picks (..., K) with -1 for none -> (..., K) bool: valid and not a repeat of an earlier rule's pick."""
-    k = picks.shape[-1]
-    same = picks.unsqueeze(-1) == picks.unsqueeze(-2)  # (..., K, K): [a, b] pick a equals pick b
-    earlier = torch.ones(k, k, dtype=torch.bool, device=picks.device).tril(-1)  # b < a
-    return (picks >= 0) & ~(same & earlier).any(-1)
+    valid = [picks[..., 0] >= 0]
+    for k in range(1, picks.shape[-1]):  # K(K-1)/2 compares of (...) tensors beat one (..., K, K) broadcast
+        pk = picks[..., k]
+        dup = pk == picks[..., 0]
+        for m in range(1, k):
+            dup |= pk == picks[..., m]
+        valid.append((pk >= 0) & ~dup)
+    return torch.stack(valid, -1)
+
+
+def degree_counts(picks: Tensor, valid: Tensor, n: int) -> tuple[Tensor, Tensor]:
+    """picks, valid: (S, N, K) -> in- and out-degree (S, N) int32 of every agent (self edges never picked)."""
+    s = picks.shape[0]
+    deg_in = valid.sum(-1, dtype=torch.int32)
+    idx = torch.where(valid, picks, n).flatten(1)  # (S, N K); invalid picks land in column n
+    deg_out = torch.zeros(s, n + 1, dtype=torch.int32, device=picks.device)
+    deg_out.scatter_add_(1, idx, torch.ones_like(idx, dtype=torch.int32))
+    return deg_in, deg_out[:, :n]
+
+
+def degree_from_counts(deg_in: Tensor, deg_out: Tensor, objective: str, cap: int) -> Tensor:
+    """(S, N) in/out degrees -> (S,) the per-state degree term: max_i (in + out), or the reference's hinges."""
+    if objective == "hinge":
+        return (torch.relu(deg_in.amax(-1) - cap) + torch.relu(deg_out.amax(-1) - cap)).float()
+    return (deg_in + deg_out).amax(-1).float()
 
 
 def degree_term(picks: Tensor, valid: Tensor, n: int, objective: str, cap: int) -> Tensor:
     """picks, valid: (S, N, K) -> (S,) the per-state degree term."""
-    s = picks.shape[0]
-    deg_in = valid.sum(-1)  # (S, N)
-    idx = torch.where(valid, picks, n).flatten(1)  # (S, N K); invalid picks land in column n
-    deg_out = torch.zeros(s, n + 1, dtype=deg_in.dtype, device=picks.device).scatter_add_(1, idx, torch.ones_like(idx))
-    deg_out = deg_out[:, :n]
-    if objective == "hinge":
-        return (torch.relu(deg_in.amax(-1) - cap) + torch.relu(deg_out.amax(-1) - cap)).float()
-    return (deg_in + deg_out).amax(-1).float()
+    return degree_from_counts(*degree_counts(picks, valid, n), objective, cap)
 
 
 class _Prepared:
@@ -84,17 +99,36 @@ class _Prepared:
             x, _ = policy.rounds[q].aggregate(x, self.logits[q], others, self.rel)
         self.x_in = x  # (S, N, D) input of the synthesized round
         layer = policy.rounds[round_idx]
+        # W_o is linear, so W_o sum_j a_ij m_j->i + b_o = sum_j a_ij (W_o m_j->i) + b_o (the a_ij sum to 1 or 0):
+        # cache x_i + b_o and the projected messages W_o m_j->i instead of projecting every row per proposal
+        self.base = (x + layer.out.bias).reshape(-1, x.shape[-1])  # (S N, D)
         self.values = layer.value(x)  # (S, N, D)
         self.others = others
-        # the full message m_j->i = W_v x_j + ReLU(W_m o_ji) of every pair, when it fits (<= 8M pairs, ~0.5 GB):
-        # scoring then gathers K messages per agent instead of recomputing them
+        # the projected message of every pair, when it fits (<= 32M pairs, ~2 GB): scoring then gathers K
+        # messages per agent instead of recomputing them
         self.messages: Tensor | None = None
-        if self.s * self.n * self.n <= 8_000_000:
+        if self.s * self.n * self.n <= 32_000_000:
             self.messages = torch.cat([
-                self.values[c:c + 2048, None, :, :]
-                + torch.relu(layer.msg_edge(self.rel[c:c + 2048].transpose(1, 2)))  # [i, j] from o_ji
-                for c in range(0, self.s, 2048)])  # (S, N, N, D): [s, i, j] = message j -> i
-        self.uniforms: list[Tensor] = []
+                F.linear(self.values[c:c + 1024, None, :, :]
+                         + torch.relu(layer.msg_edge(self.rel[c:c + 1024].transpose(1, 2))),  # [i, j] from o_ji
+                         layer.out.weight)
+                for c in range(0, self.s, 1024)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
+        self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
+        self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
+        self.uniforms: dict[tuple[int, int], Tensor] = {}
+
+
+@dataclass
+class _Current:
+    """The accepted program of one bucket and one random sample: each rule's picks, per-row L1 and degrees."""
+
+    picks: list[Tensor]  # per rule (S N,) int8 views of cached picks
+    table: Tensor  # (S N, K) int8: the same picks, one row per agent
+    l1: Tensor  # (S N,) L1 action error per agent
+    deg_in: Tensor  # (S N,) int32
+    deg_out: Tensor  # (S N,) int32
+    l1_sum: float
+    deg_sum: float
 
 
 class CachedScorer:
@@ -105,120 +139,158 @@ class CachedScorer:
                  gen: torch.Generator, device: torch.device, cache_size: int = 256):
         self.policy = policy.eval()
         self.env, self.round, self.lam, self.objective, self.cap = env, round_idx, lam, objective, cap
-        self.samples, self.gen, self.device = samples, gen, device
+        self.samples, self.device = samples, device
+        # every (bucket, rule position, sample) draws its uniforms from its own seed: random rules at different
+        # positions are independent, as at run time, and the draws do not depend on the search path
+        self.uniform_seed = int(torch.randint(0, 2**62, (1,), generator=gen))
         self.last_round = round_idx == policy.n_rounds - 1
         with torch.no_grad():
             self.data = [_Prepared(policy, kind, b, round_idx, version, device) for b in buckets]
         self.total_states = sum(d.s for d in self.data)
-        self.rule_cache: OrderedDict[Rule, list[Tensor]] = OrderedDict()
+        self.rule_cache: OrderedDict[tuple, list[Tensor]] = OrderedDict()
         self.cache_size = cache_size
-        self.current: tuple | None = None  # (rules, per-bucket picks (R, S, N, K), per-bucket l1 rows (R, S, N))
-        self.pending: tuple | None = None
+        self.current: tuple[tuple, list[list[_Current]]] | None = None  # (rule keys, per bucket per sample)
+        self.pending: tuple[tuple, list[list[_Current]]] | None = None
         self.rows_recomputed = 0
 
     # ------------------------------------------------------------------------------------------ picks
-    def _uniforms(self, d: _Prepared) -> list[Tensor]:
-        if not d.uniforms:
-            d.uniforms = [torch.rand(d.s, d.n, d.n, generator=self.gen).to(self.device) for _ in range(self.samples)]
-        return d.uniforms
+    def _uniforms(self, bi: int, position: int, sample: int) -> Tensor:
+        """(S, N, N) common random numbers of the random rule at ``position`` in bucket ``bi``."""
+        d = self.data[bi]
+        if (position, sample) not in d.uniforms:
+            g = torch.Generator().manual_seed(self.uniform_seed + 1_000_003 * bi + 1009 * position + sample)
+            d.uniforms[(position, sample)] = torch.rand(d.s, d.n, d.n, generator=g).to(self.device)
+        return d.uniforms[(position, sample)]
 
-    def picks_of(self, rule: Rule) -> list[Tensor]:
-        """Per bucket (R, S, N) int8 picks of one rule (R = samples for random rules, else 1); cached."""
-        if rule in self.rule_cache:
-            self.rule_cache.move_to_end(rule)
-            return self.rule_cache[rule]
+    @staticmethod
+    def _key(rule: Rule, position: int) -> tuple:
+        # a random rule's picks depend on its position's random numbers; an argmax rule's do not
+        return (rule, position) if isinstance(rule, RandomRule) else (rule, -1)
+
+    def picks_of(self, rule: Rule, position: int = 0) -> list[Tensor]:
+        """Per bucket (R, S N) int8 picks of one rule (R = samples for random rules, else 1); cached."""
+        key = self._key(rule, position)
+        if key in self.rule_cache:
+            self.rule_cache.move_to_end(key)
+            return self.rule_cache[key]
         out = []
-        for d in self.data:
+        for bi, d in enumerate(self.data):
             if isinstance(rule, RandomRule):
-                ps = [rule_picks(rule, d.feats, _Uniforms(u)) for u in self._uniforms(d)]
+                ps = [rule_picks(rule, d.feats, _Uniforms(self._uniforms(bi, position, r)))
+                      for r in range(self.samples)]
             else:
                 ps = [rule_picks(rule, d.feats, None)]
-            out.append(torch.stack(ps).to(torch.int8))
-        self.rule_cache[rule] = out
+            out.append(torch.stack(ps).to(torch.int8).flatten(1))
+        self.rule_cache[key] = out
         if len(self.rule_cache) > self.cache_size:
             self.rule_cache.popitem(last=False)
         return out
 
-    def _program_picks(self, rules: tuple[Rule, ...]) -> list[Tensor]:
-        """Per bucket (R, S, N, K) long, R = samples (deterministic rules broadcast)."""
-        per_rule = [self.picks_of(r) for r in rules]
-        out = []
-        for bi in range(len(self.data)):
-            parts = [p[bi].long().expand(self.samples, -1, -1) for p in per_rule]
-            out.append(torch.stack(parts, -1))
-        return out
-
     # ---------------------------------------------------------------------------------------- forward
-    def _round_out(self, d: _Prepared, rows: Tensor, picks: Tensor) -> Tensor:
-        """Output of the synthesized round for flat rows (M,) of (S N) with their picks (M, K) -> (M, D)."""
+    def _round_out(self, d: _Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
+        """Output of the synthesized round for flat rows (M,) of (S N) with their picks and valid (M, K) -> (M, D)."""
         layer = self.policy.rounds[self.round]
         n = d.n
-        valid = dedup_valid(picks)
         pk = picks.clamp(min=0)
-        s_n = (rows - rows % n)[:, None]  # (M, 1): s * N
-        i_idx = (rows % n)[:, None]
         # flat gathers (one index tensor each) are several times faster than 3-index advanced indexing
-        lg = d.logits[self.round].reshape(-1)[rows[:, None] * n + pk]  # (M, K): l_ij of the picked j
+        pair = (rows[:, None] * n + pk).flatten()  # (M K,) flat index of pair (s, i, j)
+        lg = d.logits_flat.index_select(0, pair).view(pk.shape)  # (M, K): l_ij of the picked j
         # softmax over the <= K picked agents, written out: torch's softmax over a last dim of size K is slow on CPU
         top = lg.masked_fill(~valid, NEG).amax(-1, keepdim=True)
         e = torch.exp((lg - top).masked_fill(~valid, float("-inf")))  # 0 outside the picks; no inf * 0
         attn = e / e.sum(-1, keepdim=True).clamp(min=1e-30)
         if d.messages is not None:
-            msg = d.messages.reshape(-1, d.messages.shape[-1]).index_select(0, (rows[:, None] * n + pk).flatten())
-            msg = msg.view(*pk.shape, -1)  # (M, K, D)
+            msg = d.messages.index_select(0, pair).view(*pk.shape, -1)  # (M, K, D) projected messages
         else:
-            o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + i_idx).flatten()).view(*pk.shape, 2)
-            vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten()).view(*pk.shape, -1)
-            msg = vals + torch.relu(layer.msg_edge(o_ji))  # (M, K, D): value of j plus its view o_ji of i
-        agg = (attn.unsqueeze(-1) * msg).sum(1)
-        z = layer.norm1(d.x_in.reshape(-1, d.x_in.shape[-1]).index_select(0, rows) + layer.out(agg))
+            s_n = (rows - rows % n)[:, None]  # (M, 1): s * N
+            o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + (rows % n)[:, None]).flatten())
+            vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten())
+            msg = F.linear(vals + torch.relu(layer.msg_edge(o_ji)), layer.out.weight).view(*pk.shape, -1)
+        agg = (attn.unsqueeze(-1) * msg).sum(1)  # (M, D): sum_k a_k W_o m_k
+        z = layer.norm1(d.base.index_select(0, rows) + agg)
         return layer.norm2(z + layer.ffn2(torch.relu(layer.ffn1(z))))
 
-    def _l1_rows(self, d: _Prepared, rows: Tensor, picks: Tensor) -> Tensor:
+    def _l1_rows(self, d: _Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """(M,) L1 action error of the given rows (only valid for the last round)."""
-        y = self._round_out(d, rows, picks)
+        y = self._round_out(d, rows, picks, valid)
         a = self.env.effective_action(self.policy.head(y))
-        return (a - d.target.reshape(d.s * d.n, -1)[rows]).abs().sum(-1)
+        return (a - d.target_flat.index_select(0, rows)).abs().sum(-1)
 
-    def _l1_all(self, d: _Prepared, picks: Tensor) -> Tensor:
-        """(S, N) L1 error of every agent; later rounds (soft attention) are recomputed in full."""
+    def _l1_all(self, d: _Prepared, picks: Tensor, valid: Tensor) -> Tensor:
+        """(S N,) L1 error of every agent from picks, valid (S N, K); later rounds (soft attention) in full."""
         rows = torch.arange(d.s * d.n, device=self.device)
-        flat = picks.reshape(-1, picks.shape[-1])
         if self.last_round:
-            return self._l1_rows(d, rows, flat).reshape(d.s, d.n)
-        x = self._round_out(d, rows, flat).reshape(d.s, d.n, -1)
+            return self._l1_rows(d, rows, picks, valid)
+        x = self._round_out(d, rows, picks, valid).reshape(d.s, d.n, -1)
         for q in range(self.round + 1, self.policy.n_rounds):
             x, _ = self.policy.rounds[q].aggregate(x, d.logits[q], d.others, d.rel)
         a = self.env.effective_action(self.policy.head(x))
-        return (a - d.target).abs().sum(-1)
+        return (a - d.target).abs().sum(-1).flatten()
 
     # ------------------------------------------------------------------------------------------ score
+    def _full(self, d: _Prepared, picks: list[Tensor]) -> _Current:
+        p = torch.stack(picks, -1).long()  # (S N, K)
+        valid = dedup_valid(p)
+        l1 = self._l1_all(d, p, valid)
+        deg_in, deg_out = degree_counts(p.view(d.s, d.n, -1), valid.view(d.s, d.n, -1), d.n)
+        deg = degree_from_counts(deg_in, deg_out, self.objective, self.cap)
+        return _Current(picks, p.to(torch.int8), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
+                        float(deg.sum()))
+
+    def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
+        """Only the agents whose pick of a changed rule differs are recomputed (L1 and degree counts)."""
+        diff = picks[changed[0]] != cur.picks[changed[0]]
+        for k in changed[1:]:
+            diff |= picks[k] != cur.picks[k]
+        rows = diff.nonzero().squeeze(-1)  # (M,) flat (s, i)
+        if rows.numel() == 0:
+            return _Current(picks, cur.table, cur.l1, cur.deg_in, cur.deg_out, cur.l1_sum, cur.deg_sum)
+        self.rows_recomputed += int(rows.numel())
+        table = cur.table.clone()
+        for k in changed:
+            table[:, k] = picks[k]
+        old = cur.table.index_select(0, rows).long()  # (M, K)
+        new = table.index_select(0, rows).long()
+        new_valid, old_valid = dedup_valid(new), dedup_valid(old)
+        l1 = cur.l1.clone()
+        l1[rows] = self._l1_rows(d, rows, new, new_valid)
+        deg_in = cur.deg_in.clone()
+        deg_in[rows] = new_valid.sum(-1, dtype=torch.int32)
+        # out-degree: the old picks of these rows lose one listener each, the new picks gain one
+        s_n = (rows - rows % d.n)[:, None]
+        deg_out = cur.deg_out.clone()
+        deg_out.index_add_(0, (s_n + old.clamp(min=0))[old_valid], torch.full((int(old_valid.sum()),), -1,
+                                                                                dtype=torch.int32))
+        deg_out.index_add_(0, (s_n + new.clamp(min=0))[new_valid], torch.ones(int(new_valid.sum()),
+                                                                               dtype=torch.int32))
+        deg = degree_from_counts(deg_in.view(d.s, d.n), deg_out.view(d.s, d.n), self.objective, self.cap)
+        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg.sum()))
+
     @torch.no_grad()
     def score(self, rules: tuple[Rule, ...]) -> Score:
         """Objective of a program (the rules of this round); remembered until ``accept`` or the next call."""
-        picks = self._program_picks(rules)
-        l1_rows, l1_sum, deg_sum = [], 0.0, 0.0
+        keys = tuple(self._key(r, k) for k, r in enumerate(rules))
+        per_rule = [self.picks_of(r, k) for k, r in enumerate(rules)]
+        changed = None
+        if self.current is not None and self.last_round and len(self.current[0]) == len(keys):
+            changed = [k for k in range(len(keys)) if keys[k] != self.current[0][k]]
+        states: list[list[_Current]] = []
+        l1_sum, deg_sum = 0.0, 0.0
         for bi, d in enumerate(self.data):
-            p = picks[bi]  # (R, S, N, K)
-            cur = None
-            if self.current is not None and self.last_round and self.current[1][bi].shape == p.shape:
-                cur = self.current
             per_sample = []
             for r in range(self.samples):
-                if cur is None:
-                    rows_l1 = self._l1_all(d, p[r])
+                picks = [p[bi][min(r, p[bi].shape[0] - 1)] for p in per_rule]  # deterministic rules broadcast
+                if changed is None:
+                    c = self._full(d, picks)
+                elif changed:
+                    c = self._incremental(d, self.current[1][bi][r], picks, changed)  # type: ignore[index]
                 else:
-                    rows_l1 = cur[2][bi][r].clone()
-                    changed = (p[r] != cur[1][bi][r]).any(-1).flatten().nonzero().squeeze(-1)
-                    if changed.numel():
-                        flat = p[r].reshape(-1, p.shape[-1])[changed]
-                        rows_l1.view(-1)[changed] = self._l1_rows(d, changed, flat)
-                        self.rows_recomputed += int(changed.numel())
-                per_sample.append(rows_l1)
-                l1_sum += float(rows_l1.sum())
-                deg_sum += float(degree_term(p[r], dedup_valid(p[r]), d.n, self.objective, self.cap).sum())
-            l1_rows.append(torch.stack(per_sample))
-        self.pending = (rules, picks, l1_rows)
+                    c = self.current[1][bi][r]  # type: ignore[index]
+                per_sample.append(c)
+                l1_sum += c.l1_sum
+                deg_sum += c.deg_sum
+            states.append(per_sample)
+        self.pending = (keys, states)
         norm = self.total_states * self.samples
         l1, deg = l1_sum / norm, deg_sum / norm
         return Score(l1 + self.lam * deg, l1, deg)
@@ -233,20 +305,21 @@ class CachedScorer:
         """The reference-style scorer: a full transformer forward pass over every state of D (no caches besides
         the random draws, so both scorers see the same random picks)."""
         l1_sum, deg_sum = 0.0, 0.0
-        for d in self.data:
+        for bi, d in enumerate(self.data):
             for r in range(self.samples):
-                u = None if program.deterministic else self._uniforms(d)[r]
                 for s0 in range(0, d.s, chunk):
                     sl = slice(s0, min(s0 + chunk, d.s))
                     obs = Observation(d.agent[sl], d.rel[sl])
                     feats = PairFeatures(d.feats.kind, d.agent[sl], d.rel[sl], d.feats.version)
-                    src = _Uniforms(u[sl]) if u is not None else None
                     masks = {}
 
                     def select(logits: Tensor, q: int) -> Tensor:
                         if q != self.round:
                             return ~torch.eye(d.n, dtype=torch.bool, device=logits.device).expand_as(logits)
-                        picks = torch.stack([rule_picks(rule, feats, src) for rule in program.rounds[0]], -1)
+                        picks = torch.stack([
+                            rule_picks(rule, feats, _Uniforms(self._uniforms(bi, k, r)[sl])
+                                       if isinstance(rule, RandomRule) else None)
+                            for k, rule in enumerate(program.rounds[0])], -1)
                         masks["picks"] = picks
                         return picks_to_mask(picks, d.n)
 
