@@ -90,8 +90,9 @@ class _Prepared:
         self.agent, self.rel, self.target = b.agent.to(device), b.rel.to(device), b.target.to(device)
         self.feats = PairFeatures(kind, self.agent, self.rel, version)
         h = torch.relu(policy.embed(self.agent))  # (S, N, D)
-        # per round (S, N, N); in chunks of states, since the keys are (S, N, N, D) before the reduction
-        self.logits = [torch.cat([layer.logits(h[c:c + 2048], self.rel[c:c + 2048]) for c in range(0, self.s, 2048)])
+        # per round (S, N, N); in chunks of ~1M pairs, since the keys are (S, N, N, D) before the reduction
+        ch = max(1, 1_000_000 // (self.n * self.n))
+        self.logits = [torch.cat([layer.logits(h[c:c + ch], self.rel[c:c + ch]) for c in range(0, self.s, ch)])
                        for layer in policy.rounds]
         x = h
         others = ~torch.eye(self.n, dtype=torch.bool, device=device).expand(self.s, -1, -1)
@@ -109,10 +110,10 @@ class _Prepared:
         self.messages: Tensor | None = None
         if self.s * self.n * self.n <= 32_000_000:
             self.messages = torch.cat([
-                F.linear(self.values[c:c + 1024, None, :, :]
-                         + torch.relu(layer.msg_edge(self.rel[c:c + 1024].transpose(1, 2))),  # [i, j] from o_ji
+                F.linear(self.values[c:c + ch, None, :, :]
+                         + torch.relu(layer.msg_edge(self.rel[c:c + ch].transpose(1, 2))),  # [i, j] from o_ji
                          layer.out.weight)
-                for c in range(0, self.s, 1024)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
+                for c in range(0, self.s, ch)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
         self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
         self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
         self.uniforms: dict[tuple[int, int], Tensor] = {}
@@ -301,11 +302,12 @@ class CachedScorer:
 
     # ---------------------------------------------------------------------------- reference scorer
     @torch.no_grad()
-    def full_score(self, program: Program, chunk: int = 4096) -> Score:
+    def full_score(self, program: Program, pairs: int = 4_000_000) -> Score:
         """The reference-style scorer: a full transformer forward pass over every state of D (no caches besides
-        the random draws, so both scorers see the same random picks)."""
+        the random draws, so both scorers see the same random picks), in chunks of about ``pairs`` agent pairs."""
         l1_sum, deg_sum = 0.0, 0.0
         for bi, d in enumerate(self.data):
+            chunk = max(1, pairs // (d.n * d.n))
             for r in range(self.samples):
                 for s0 in range(0, d.s, chunk):
                     sl = slice(s0, min(s0 + chunk, d.s))
