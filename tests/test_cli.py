@@ -228,8 +228,12 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
                   "dt-retrained-k2-v1"):
         assert (exp / "eval" / label / "metrics.json").exists(), label
     assert (exp / "eval/figure2.png").stat().st_size > 1000
+    timings = json.loads((exp / "pipeline_timings.json").read_text())
+    assert {"train tf-full", "synth prog", "retrain prog-retrained", "eval dt"} <= set(timings)
     p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path)
     assert p.stdout.count("already trained") == 4 and p.stdout.count("already synthesized") == 2
+    # a rerun reuses the artifacts and keeps the time each took to make
+    assert json.loads((exp / "pipeline_timings.json").read_text())["train tf-full"] == timings["train tf-full"]
 
 
 def test_per_seed_pipelines_and_report(tmp_path):

@@ -5,7 +5,7 @@ import random
 import torch
 
 from neurosym_cli.config import ModelConfig, TaskConfig
-from neurosym_cli.dsl import ArgMaxRule, Linear, Program, TrueCond
+from neurosym_cli.dsl import ArgMaxRule, Linear, Program, RandomRule, TrueCond
 from neurosym_cli.dsl.interpret import picks_to_mask, rule_picks
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
 from neurosym_cli.envs import Observation, make_env
@@ -57,6 +57,23 @@ def test_incremental_scoring_equals_full_scoring():
             sc.accept()
             rules = cand
     assert sc.rows_recomputed > 0
+
+
+def test_random_rules_at_different_positions_are_independent():
+    """Two copies of `random(filter(true, l))` pick independently, as at run time: in-degree 2 where the draws
+    differ (shared random numbers would make the second copy a duplicate and the in-degree always 1)."""
+    env, pol, data = _setup()
+    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU)
+    rule = RandomRule(TrueCond())
+    a, b = sc.picks_of(rule, 0), sc.picks_of(rule, 1)
+    same = sum(int((x == y).sum()) for x, y in zip(a, b))
+    total = sum(x.numel() for x in a)
+    n_mean = sum(d.n * d.s for d in sc.data) / sc.total_states
+    assert same < 0.2 * total  # about 1 / (N - 1) of the rows agree by chance
+    assert sc.picks_of(rule, 0) is a  # cached per (rule, position)
+    inc = sc.score((rule, rule))
+    full = sc.full_score(Program(((rule, rule),)))
+    assert abs(inc.total - full.total) <= 1e-4 * max(1.0, full.total) and n_mean > 2
 
 
 def test_incremental_scoring_two_rounds():
