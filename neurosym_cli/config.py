@@ -131,12 +131,16 @@ class OptimConfig:
     """Adam learning rate at the start of retraining (fine-tuning a trained oracle wants a smaller step)"""
     step_per_bucket: bool = True
     """one Adam step per agent-count bucket of a batch (about 4 updates per batch on random-cross, same compute;
-    tasks with one agent count per batch, grid and unlabeled, get one step per batch either way)"""
+    tasks with one agent count per batch, grid and unlabeled, get one step per batch unless min_steps_per_batch)"""
+    min_steps_per_batch: int = 1
+    """with step_per_bucket: split a batch's buckets in halves until it gives at least this many Adam steps
+    (single-N tasks; random-cross already gets about 4)"""
 
     def __post_init__(self) -> None:
         _check(self.lr > 0 and self.lr_final > 0 and self.retrain_lr > 0, "optim learning rates must be positive")
         _check(self.grad_clip > 0, "optim.grad_clip must be positive")
         _check(0.0 < self.gamma <= 1.0, "optim.gamma must lie in (0, 1]")
+        _check(self.min_steps_per_batch >= 1, "optim.min_steps_per_batch must be at least 1")
 
 
 @dataclass

@@ -14,7 +14,7 @@ from typing import Callable, Protocol
 
 import torch
 
-from .envs.base import MultiAgentEnv, Rng
+from .envs.base import MultiAgentEnv, Rng, split_buckets
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer
 from .rollout import rollout
@@ -32,6 +32,7 @@ class FitSpec:
     detach_state: bool = False
     checkpoint_every: int = 10
     step_per_bucket: bool = True  # one Adam step per agent-count bucket instead of one per batch
+    min_steps_per_batch: int = 1  # with step_per_bucket: split buckets so a batch gives at least this many steps
 
     @property
     def steps(self) -> int:
@@ -90,7 +91,10 @@ def fit(
         # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory;
         # with step_per_bucket each bucket also gets its own CLIP -> STEP (more updates for the same rollouts)
         total_cost, n_eps, grad_norm = 0.0, 0, 0.0
-        for bucket in env.reset(batch, gen):
+        buckets = env.reset(batch, gen)
+        if spec.step_per_bucket and spec.min_steps_per_batch > 1:
+            buckets = split_buckets(buckets, spec.min_steps_per_batch)
+        for bucket in buckets:
             traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
             denom = bucket.batch if spec.step_per_bucket else batch
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)

@@ -94,3 +94,22 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
         torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
     after = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
     assert after < before, (before, after)
+
+
+def test_min_steps_per_batch_splits_single_n_batches():
+    """random-grid batches hold one agent count: min_steps_per_batch=4 gives 4 Adam steps per batch, each on a
+    quarter of the episodes, and the split keeps every episode."""
+    from neurosym_cli.envs.base import split_buckets
+
+    env = make_env(TaskConfig(name="random-grid", layout="grid", ell=14.0, horizon=5))
+    buckets = env.reset(10, torch.Generator().manual_seed(0))
+    parts = split_buckets(buckets, 4)
+    assert len(buckets) == 1 and len(parts) == 4 and sum(b.batch for b in parts) == 10
+    assert torch.equal(torch.cat([b.pos for b in parts]), buckets[0].pos)
+    for k, expect in ((1, 3), (4, 12)):
+        pol = _policy(env)
+        spec = FitSpec(rollouts=24, batch=8, horizon=5, min_steps_per_batch=k)
+        state = fit(pol, env, make_comm("full", 2), spec, torch.Generator().manual_seed(0), torch.device("cpu"),
+                    Quiet(), lambda s: None)
+        adam_steps = next(iter(state.optimizer["state"].values()))["step"]
+        assert int(adam_steps) == expect

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import platform
 import time
 
 import torch
 
 from .. import __version__, artifacts, paths
+from .. import config as config_module
 from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
@@ -25,12 +27,21 @@ def fit_spec(cfg: RunConfig, rollouts: int, lr: float) -> FitSpec:
     o, b = cfg.optim, cfg.budget
     return FitSpec(rollouts=rollouts, batch=b.batch_rollouts, horizon=cfg.horizon, lr=lr,
                    lr_final=min(o.lr_final, lr), grad_clip=o.grad_clip, gamma=o.gamma, detach_state=cfg.task.detach_state,
-                   checkpoint_every=b.checkpoint_every, step_per_bucket=o.step_per_bucket)
+                   checkpoint_every=b.checkpoint_every, step_per_bucket=o.step_per_bucket,
+                   min_steps_per_batch=o.min_steps_per_batch)
+
+
+def _defaults(section: str) -> dict:
+    """Default values of a config section (a key added after a checkpoint was saved compares as its default)."""
+    cls = {f.name: f.type for f in dataclasses.fields(RunConfig)}[section]
+    cls = getattr(config_module, cls) if isinstance(cls, str) else cls
+    return {f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING}
 
 
 def _check_compatible(saved: dict, current: dict, path) -> None:
     for key in _COMPAT:
-        if saved.get(key) != current.get(key):
+        old, new, dflt = saved.get(key) or {}, current.get(key) or {}, _defaults(key)
+        if any(old.get(k, dflt.get(k)) != new.get(k, dflt.get(k)) for k in set(old) | set(new)):
             raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "
                               f"or runs_root=... to train elsewhere")
 

@@ -50,6 +50,21 @@ class EnvState:
         )
 
 
+def split_buckets(buckets: Sequence[EnvState], parts: int) -> list[EnvState]:
+    """Cut the largest buckets along the batch axis until there are at least ``parts`` (or one episode each)."""
+    out = list(buckets)
+    while len(out) < parts:
+        k = max(range(len(out)), key=lambda i: out[i].batch)
+        b = out[k]
+        if b.batch < 2:
+            break
+        h = b.batch // 2
+        halves = [EnvState(b.pos[sl], b.goal[sl], b.group[sl], None if b.goal_order is None else b.goal_order[sl])
+                  for sl in (slice(0, h), slice(h, None))]
+        out[k:k + 1] = halves
+    return out
+
+
 def concat_states(states: Sequence[EnvState]) -> EnvState:
     """Stack buckets with the same N along the batch axis."""
     order = [s.goal_order for s in states]
