@@ -31,7 +31,7 @@ from neurosym_cli.synth.search import feature_quantiles
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rollouts", type=int, default=300)
-    ap.add_argument("--stride", type=int, default=1, help="1 = every step (paper size); the CLI default is 2")
+    ap.add_argument("--stride", type=int, default=1, help="1 = every step; the CLI default is synth.stride=10")
     ap.add_argument("--rules", type=int, default=5)
     ap.add_argument("--steps", type=int, default=2000, help="MCMC steps timed with the cached scorer")
     ap.add_argument("--full", type=int, default=3, help="proposals timed with the full-forward scorer")
