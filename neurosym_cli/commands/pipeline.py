@@ -6,12 +6,14 @@ reuses what exists (a trained model, a program) and resumes what was interrupted
 
 from __future__ import annotations
 
+import csv
 import time
 from importlib.resources import files
 from pathlib import Path
 
 from omegaconf import OmegaConf
 
+from .. import paths
 from ..config import ConfigError, RunConfig
 from ..utils.console import console, log
 from ..utils.io import read_json, write_json
@@ -28,6 +30,14 @@ def _stage(ctx: Context, cmd: str, baseline: str) -> tuple[RunConfig, Context]:
         raise ConfigError(f"unknown baseline {baseline!r} in `baselines`")
     raw = OmegaConf.merge(ctx.raw, {"cmd": cmd, "baseline": OmegaConf.load(str(path))})
     return OmegaConf.to_object(raw), Context(raw, ctx.multirun, ctx.hydra_dir)  # type: ignore[return-value]
+
+
+def _trained_seconds(history: Path) -> float:
+    """Sum of the per-step wall times in a training history (0 when there is none)."""
+    if not history.exists():
+        return 0.0
+    with open(history, newline="") as f:
+        return sum(float(row["seconds"]) for row in csv.DictReader(f))
 
 
 def run(cfg: RunConfig, ctx: Context) -> dict:
@@ -64,6 +74,8 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
         start = time.perf_counter()
         results[f"{cmd}:{b}"] = runners[cmd](stage_cfg, quiet)
         took = time.perf_counter() - start
+        if cmd in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
+            took = max(took, _trained_seconds(paths.train_dir(stage_cfg) / "history.csv"))
         key = f"{cmd} {b}"
         # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
         timings[key] = round(took if cmd == "eval" else max(took, timings.get(key, 0.0)), 1)

@@ -81,6 +81,9 @@ def degree_term(picks: Tensor, valid: Tensor, n: int, objective: str, cap: int) 
     return degree_from_counts(*degree_counts(picks, valid, n), objective, cap)
 
 
+MEMO = 4  # memo slots per agent
+
+
 class _Prepared:
     """Program-independent tensors of one bucket."""
 
@@ -117,6 +120,27 @@ class _Prepared:
         self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
         self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
         self.uniforms: dict[tuple[int, int], Tensor] = {}
+        # memo of each agent's L1 error per set of picked agents: a proposal often gives an agent a set it had
+        # under an earlier program (a rule moved back, another rule changed). A set is named by the sum of random
+        # 40-bit codes of its members (+1, so that no set is 0 = empty slot); MEMO slots per agent, direct-mapped.
+        self.codes = torch.randint(1, 2**40, (self.n,), generator=torch.Generator().manual_seed(self.n), dtype=torch.int64)
+        self.memo_key = torch.zeros(self.s * self.n, MEMO, dtype=torch.int64, device=device)
+        self.memo_l1 = torch.zeros(self.s * self.n, MEMO, device=device)
+
+    def set_key(self, picks: Tensor, valid: Tensor) -> Tensor:
+        """(M, K) picks and valid -> (M,) int64 name of each row's set of picked agents."""
+        return 1 + torch.where(valid, self.codes[picks.clamp(min=0)], 0).sum(-1)
+
+    def recall(self, rows: Tensor, key: Tensor) -> tuple[Tensor, Tensor]:
+        """(hit (M,) bool, L1 (M,) where hit) for rows (M,) with set names key (M,)."""
+        match = self.memo_key.index_select(0, rows) == key[:, None]  # (M, MEMO)
+        vals = (self.memo_l1.index_select(0, rows) * match).sum(-1)
+        return match.any(-1), vals
+
+    def remember(self, rows: Tensor, key: Tensor, l1: Tensor) -> None:
+        slot = rows * MEMO + key % MEMO
+        self.memo_key.view(-1)[slot] = key
+        self.memo_l1.view(-1)[slot] = l1
 
 
 @dataclass
@@ -152,7 +176,8 @@ class CachedScorer:
         self.cache_size = cache_size
         self.current: tuple[tuple, list[list[_Current]]] | None = None  # (rule keys, per bucket per sample)
         self.pending: tuple[tuple, list[list[_Current]]] | None = None
-        self.rows_recomputed = 0
+        self.rows_recomputed = 0  # agents whose action was recomputed (incremental scoring)
+        self.memo_hits = 0  # agents whose L1 came from the memo of earlier sets
 
     # ------------------------------------------------------------------------------------------ picks
     def _uniforms(self, bi: int, position: int, sample: int) -> Tensor:
@@ -233,6 +258,8 @@ class CachedScorer:
         p = torch.stack(picks, -1).long()  # (S N, K)
         valid = dedup_valid(p)
         l1 = self._l1_all(d, p, valid)
+        if self.last_round:
+            d.remember(torch.arange(d.s * d.n, device=self.device), d.set_key(p, valid), l1)
         deg_in, deg_out = degree_counts(p.view(d.s, d.n, -1), valid.view(d.s, d.n, -1), d.n)
         deg = degree_from_counts(deg_in, deg_out, self.objective, self.cap)
         return _Current(picks, p.to(torch.int8), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
@@ -246,15 +273,29 @@ class CachedScorer:
         rows = diff.nonzero().squeeze(-1)  # (M,) flat (s, i)
         if rows.numel() == 0:
             return _Current(picks, cur.table, cur.l1, cur.deg_in, cur.deg_out, cur.l1_sum, cur.deg_sum)
-        self.rows_recomputed += int(rows.numel())
         table = cur.table.clone()
         for k in changed:
             table[:, k] = picks[k]
         old = cur.table.index_select(0, rows).long()  # (M, K)
         new = table.index_select(0, rows).long()
         new_valid, old_valid = dedup_valid(new), dedup_valid(old)
+        key = d.set_key(new, new_valid)
         l1 = cur.l1.clone()
-        l1[rows] = self._l1_rows(d, rows, new, new_valid)
+        if self.last_round:
+            same = key == d.set_key(old, old_valid)  # another rule already picked the new agent: same set
+            hit, known = d.recall(rows, key)
+            hit &= ~same
+            todo = ~(same | hit)
+            l1[rows[hit]] = known[hit]
+            if bool(todo.any()):
+                fresh = self._l1_rows(d, rows[todo], new[todo], new_valid[todo])
+                l1[rows[todo]] = fresh
+                d.remember(rows[todo], key[todo], fresh)
+            self.rows_recomputed += int(todo.sum())
+            self.memo_hits += int(hit.sum())
+        else:
+            l1[rows] = self._l1_rows(d, rows, new, new_valid)
+            self.rows_recomputed += int(rows.numel())
         deg_in = cur.deg_in.clone()
         deg_in[rows] = new_valid.sum(-1, dtype=torch.int32)
         # out-degree: the old picks of these rows lose one listener each, the new picks gain one
