@@ -32,7 +32,7 @@ class FitSpec:
     detach_state: bool = False
     checkpoint_every: int = 10
     step_per_bucket: bool = True  # one Adam step per agent-count bucket instead of one per batch
-    min_steps_per_batch: int = 1  # with step_per_bucket: split buckets so a batch gives at least this many steps
+    min_steps_per_batch: int = 4  # with step_per_bucket: split buckets so a batch gives at least this many steps
 
     @property
     def steps(self) -> int:
