@@ -22,11 +22,16 @@ def model_name(cfg: RunConfig) -> str:
     return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
 
 
+def _objective_suffix(cfg: RunConfig) -> str:
+    return "" if cfg.synth.objective == "paper" else f"-{cfg.synth.objective}"
+
+
 def program_tag(cfg: RunConfig) -> str:
-    """Name of one synthesis result: K, lambda, feature map, and det- for argmax-only programs (dt: K, features)."""
+    """Name of one synthesis result: K, lambda, feature map, det- for argmax-only programs, and the objective
+    when it is not the paper's (dt: K, features)."""
     if cfg.baseline.comm == "tree":
         return f"dt-k{cfg.rules}-{cfg.features}"
-    return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
+    return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
 
 
 def baseline_label(cfg: RunConfig) -> str:
@@ -34,7 +39,7 @@ def baseline_label(cfg: RunConfig) -> str:
     if cfg.baseline.comm in ("full", "none"):
         return cfg.baseline.name
     if cfg.baseline.comm == "program":
-        return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}"
+        return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
     if cfg.baseline.comm == "tree":
         return f"{cfg.baseline.name}-k{cfg.rules}-{cfg.features}"
     return f"{cfg.baseline.name}-k{cfg.rules}"
@@ -81,12 +86,14 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
 def retrain_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
     det = " baseline=dt-retrained" if cfg.baseline.comm == "tree" else det
+    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) else ""
     return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
-            f" budget={cfg.budget.name} seed={cfg.seed}{det}")
+            f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")
 
 
 def synth_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog" if cfg.baseline.det else ""
     det = " baseline=dt" if cfg.baseline.comm == "tree" else det
+    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) and cfg.baseline.comm != "tree" else ""
     return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
-            f" budget={cfg.budget.name} seed={cfg.seed}{det}")
+            f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")

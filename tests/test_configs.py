@@ -61,3 +61,13 @@ def test_wrongly_typed_override_fails_at_compose():
 def test_paper_budget():
     b = OmegaConf.to_object(_compose("train", ["budget=paper"])).budget
     assert (b.train_rollouts, b.eval_seeds) == (10_000, 20)
+
+
+def test_hinge_programs_do_not_share_the_paper_objectives_place():
+    from neurosym_cli import paths
+
+    paper = OmegaConf.to_object(_compose("synth", ["task=random-grid", "baseline=prog"]))
+    hinge = OmegaConf.to_object(_compose("synth", ["task=random-grid", "baseline=prog", "synth.objective=hinge"]))
+    assert paths.program_tag(paper) == "k2-lam0.5-v1" and paths.program_tag(hinge) == "k2-lam0.5-v1-hinge"
+    assert paths.synth_dir(paper) != paths.synth_dir(hinge)
+    assert "synth.objective=hinge" in paths.synth_command(hinge)
