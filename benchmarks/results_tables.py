@@ -22,11 +22,17 @@ T95 = {19: 2.093, 9: 2.262, 4: 2.776, 1: 12.706}  # two-sided 95% t quantiles by
 CLAIMS_FORMATION = "random-cross", "random-grid"
 
 
-def load(exp: Path) -> dict[str, dict]:
-    """baseline name -> metrics.json of its evaluation."""
+def load(exp: Path, lam: float | None, objective: str) -> dict[str, dict]:
+    """baseline name -> metrics.json of its evaluation; program baselines only those searched with this lambda
+    (None: the task's default) and objective."""
     out = {}
     for f in sorted(exp.glob("eval/*/metrics.json")):
         m = json.loads(f.read_text())
+        c = m["config"]
+        if c["baseline"]["comm"] == "program":
+            want = c["task"]["lam"] if lam is None else lam
+            if c["lam"] != want or c["synth"]["objective"] != objective:
+                continue
         out[m["baseline"]] = m
     return out
 
@@ -92,13 +98,14 @@ def claims(task: str, r: dict[str, dict]) -> list[str]:
     return lines
 
 
-def section(task: str, exp: Path, figures: Path | None) -> str:
-    r = load(exp)
+def section(task: str, exp: Path, figures: Path | None, lam: float | None = None, objective: str = "paper") -> str:
+    r = load(exp, lam, objective)
     if not r:
         return f"## {task}\n\nno evaluations under {exp}\n"
-    any_m = next(iter(r.values()))
-    seeds = any_m["summary"]["cost"]["n"]
-    out = [f"## {task}", "", f"K = {any_m['rules']}, lambda = {any_m['config']['lam']:g}, "
+    prog = r.get("prog", next(iter(r.values())))
+    seeds = prog["summary"]["cost"]["n"]
+    variant = "" if lam is None and objective == "paper" else f" (programs: lambda {prog['config']['lam']:g}, {objective} objective)"
+    out = [f"## {task}{variant}", "", f"K = {prog['rules']}, lambda = {prog['config']['lam']:g}, objective {objective}, "
            f"{seeds} evaluation seeds; loss, max in-degree, max out-degree: mean ± std over the seeds.", "",
            "| baseline | loss | max in-degree | max out-degree | mean degree |", "|---|---|---|---|---|"]
     order = ["tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
@@ -108,16 +115,17 @@ def section(task: str, exp: Path, figures: Path | None) -> str:
         digits = 3 if task == "unlabeled-goals" else 2
         out.append(f"| {b} | {ms(m, 'cost', digits)} | {ms(m, 'max_in')} | {ms(m, 'max_out')} | "
                    f"{ms(m, 'mean_degree')} |")
-    if figures is not None and (exp / "eval" / "figure2.png").exists():
+    if figures is not None and not variant and (exp / "eval" / "figure2.png").exists():
         figures.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(exp / "eval" / "figure2.png", figures / f"{task}.png")
         out += ["", f"![{task}: loss vs max degree](figures/{task}.png)"]
     out += ["", "Synthesized programs (`neurosym show-program` prints them with a plain-language reading):", ""]
-    for tag in sorted(p.name for p in (exp / "synth").glob("*") if (p / "program.txt").exists()):
+    suffix = f"-lam{prog['config']['lam']:g}-{prog['config']['features']}" + ("" if objective == "paper" else f"-{objective}")
+    for tag in sorted(p.name for p in (exp / "synth").glob("*") if (p / "program.txt").exists() and p.name.endswith(suffix)):
         text = (exp / "synth" / tag / "program.txt").read_text()
         out += [f"`{tag}`:", "", "```", text.strip(), "```", ""]
     timing = exp / "pipeline_timings.json"
-    if timing.exists():
+    if timing.exists() and not variant:
         t = json.loads(timing.read_text())
         total = sum(t.values())
         out += ["Wall time per stage (one CPU thread, two pipelines sharing the 2 cores):", "",
@@ -134,10 +142,12 @@ def main() -> None:
     ap.add_argument("--budget", default="paper")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--figures", default="", help="copy each task's Figure-2 plot here")
+    ap.add_argument("--lam", type=float, default=None, help="programs searched with this lambda (default: the task's)")
+    ap.add_argument("--objective", default="paper", help="programs searched with this objective (paper, hinge)")
     a = ap.parse_args()
     figs = Path(a.figures) if a.figures else None
     for task in a.tasks:
-        print(section(task, Path(a.root) / task / a.budget / f"seed{a.seed}", figs))
+        print(section(task, Path(a.root) / task / a.budget / f"seed{a.seed}", figs, a.lam, a.objective))
 
 
 if __name__ == "__main__":
