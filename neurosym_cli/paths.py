@@ -23,7 +23,8 @@ def model_name(cfg: RunConfig) -> str:
 
 
 def _objective_suffix(cfg: RunConfig) -> str:
-    return "" if cfg.synth.objective == "paper" else f"-{cfg.synth.objective}"
+    """'-hinge' for programs searched with a non-paper objective; trees have no objective."""
+    return "" if cfg.synth.objective == "paper" or cfg.baseline.comm == "tree" else f"-{cfg.synth.objective}"
 
 
 def program_tag(cfg: RunConfig) -> str:
@@ -94,6 +95,6 @@ def retrain_command(cfg: RunConfig) -> str:
 def synth_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog" if cfg.baseline.det else ""
     det = " baseline=dt" if cfg.baseline.comm == "tree" else det
-    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) and cfg.baseline.comm != "tree" else ""
+    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) else ""
     return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")

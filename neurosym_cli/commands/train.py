@@ -9,8 +9,7 @@ import time
 import torch
 
 from .. import __version__, artifacts, paths
-from .. import config as config_module
-from ..config import ConfigError, RunConfig
+from ..config import ConfigError, ModelConfig, OptimConfig, RunConfig, TaskConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
 from ..training import FitSpec, FitState, fit
@@ -18,9 +17,6 @@ from ..utils.console import ProgressReporter, console, log, use_rich
 from ..utils.device import resolve_device
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from ._run import Context
-
-# config sections that must match for a checkpoint to be resumed or extended
-_COMPAT = ("task", "model", "optim")
 
 
 def fit_spec(cfg: RunConfig, rollouts: int, lr: float) -> FitSpec:
@@ -31,15 +27,17 @@ def fit_spec(cfg: RunConfig, rollouts: int, lr: float) -> FitSpec:
                    min_steps_per_batch=o.min_steps_per_batch)
 
 
+# config sections that must match for a checkpoint to be resumed or extended
+_SECTIONS = {"task": TaskConfig, "model": ModelConfig, "optim": OptimConfig}
+
+
 def _defaults(section: str) -> dict:
     """Default values of a config section (a key added after a checkpoint was saved compares as its default)."""
-    cls = {f.name: f.type for f in dataclasses.fields(RunConfig)}[section]
-    cls = getattr(config_module, cls) if isinstance(cls, str) else cls
-    return {f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING}
+    return {f.name: f.default for f in dataclasses.fields(_SECTIONS[section]) if f.default is not dataclasses.MISSING}
 
 
 def _check_compatible(saved: dict, current: dict, path) -> None:
-    for key in _COMPAT:
+    for key in _SECTIONS:
         old, new, dflt = saved.get(key) or {}, current.get(key) or {}, _defaults(key)
         if any(old.get(k, dflt.get(k)) != new.get(k, dflt.get(k)) for k in set(old) | set(new)):
             raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "

@@ -43,6 +43,11 @@ class EnvState:
     def detach(self) -> "EnvState":
         return replace(self, pos=self.pos.detach())
 
+    def take(self, episodes: slice) -> "EnvState":
+        """The bucket's episodes ``episodes`` (a slice of the batch axis)."""
+        return EnvState(self.pos[episodes], self.goal[episodes], self.group[episodes],
+                        None if self.goal_order is None else self.goal_order[episodes])
+
     def to(self, device: torch.device) -> "EnvState":
         return EnvState(
             self.pos.to(device), self.goal.to(device), self.group.to(device),
@@ -59,9 +64,7 @@ def split_buckets(buckets: Sequence[EnvState], parts: int) -> list[EnvState]:
         if b.batch < 2:
             break
         h = b.batch // 2
-        halves = [EnvState(b.pos[sl], b.goal[sl], b.group[sl], None if b.goal_order is None else b.goal_order[sl])
-                  for sl in (slice(0, h), slice(h, None))]
-        out[k:k + 1] = halves
+        out[k:k + 1] = [b.take(slice(0, h)), b.take(slice(h, None))]
     return out
 
 

@@ -88,7 +88,7 @@ class _Prepared:
     """Program-independent tensors of one bucket."""
 
     def __init__(self, policy: CommTransformer, kind: str, b: DataBucket, round_idx: int, version: str,
-                 device: torch.device):
+                 device: torch.device, memo: bool):
         self.s, self.n = b.states, b.n_agents
         self.agent, self.rel, self.target = b.agent.to(device), b.rel.to(device), b.target.to(device)
         self.feats = PairFeatures(kind, self.agent, self.rel, version)
@@ -101,7 +101,6 @@ class _Prepared:
         others = ~torch.eye(self.n, dtype=torch.bool, device=device).expand(self.s, -1, -1)
         for q in range(round_idx):  # rounds before the synthesized one use full soft attention
             x, _ = policy.rounds[q].aggregate(x, self.logits[q], others, self.rel)
-        self.x_in = x  # (S, N, D) input of the synthesized round
         layer = policy.rounds[round_idx]
         # W_o is linear, so W_o sum_j a_ij m_j->i + b_o = sum_j a_ij (W_o m_j->i) + b_o (the a_ij sum to 1 or 0):
         # cache x_i + b_o and the projected messages W_o m_j->i instead of projecting every row per proposal
@@ -123,9 +122,12 @@ class _Prepared:
         # memo of each agent's L1 error per set of picked agents: a proposal often gives an agent a set it had
         # under an earlier program (a rule moved back, another rule changed). A set is named by the sum of random
         # 40-bit codes of its members (+1, so that no set is 0 = empty slot); MEMO slots per agent, direct-mapped.
-        self.codes = torch.randint(1, 2**40, (self.n,), generator=torch.Generator().manual_seed(self.n), dtype=torch.int64)
-        self.memo_key = torch.zeros(self.s * self.n, MEMO, dtype=torch.int64, device=device)
-        self.memo_l1 = torch.zeros(self.s * self.n, MEMO, device=device)
+        # Only the last round has per-agent errors to remember (an earlier round's program changes every agent).
+        self.codes = torch.randint(1, 2**40, (self.n,), generator=torch.Generator().manual_seed(self.n),
+                                   dtype=torch.int64).to(device)
+        rows = self.s * self.n if memo else 0
+        self.memo_key = torch.zeros(rows, MEMO, dtype=torch.int64, device=device)
+        self.memo_l1 = torch.zeros(rows, MEMO, device=device)
 
     def set_key(self, picks: Tensor, valid: Tensor) -> Tensor:
         """(M, K) picks and valid -> (M,) int64 name of each row's set of picked agents."""
@@ -170,7 +172,8 @@ class CachedScorer:
         self.uniform_seed = int(torch.randint(0, 2**62, (1,), generator=gen))
         self.last_round = round_idx == policy.n_rounds - 1
         with torch.no_grad():
-            self.data = [_Prepared(policy, kind, b, round_idx, version, device) for b in buckets]
+            self.data = [_Prepared(policy, kind, b, round_idx, version, device, memo=self.last_round)
+                         for b in buckets]
         self.total_states = sum(d.s for d in self.data)
         self.rule_cache: OrderedDict[tuple, list[Tensor]] = OrderedDict()
         self.cache_size = cache_size
@@ -266,7 +269,8 @@ class CachedScorer:
                         float(deg.sum()))
 
     def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
-        """Only the agents whose pick of a changed rule differs are recomputed (L1 and degree counts)."""
+        """Only the agents whose pick of a changed rule differs are recomputed (L1 and degree counts); last round
+        only, since an earlier round's picks change every agent's input to the next round."""
         diff = picks[changed[0]] != cur.picks[changed[0]]
         for k in changed[1:]:
             diff |= picks[k] != cur.picks[k]
@@ -281,21 +285,17 @@ class CachedScorer:
         new_valid, old_valid = dedup_valid(new), dedup_valid(old)
         key = d.set_key(new, new_valid)
         l1 = cur.l1.clone()
-        if self.last_round:
-            same = key == d.set_key(old, old_valid)  # another rule already picked the new agent: same set
-            hit, known = d.recall(rows, key)
-            hit &= ~same
-            todo = ~(same | hit)
-            l1[rows[hit]] = known[hit]
-            if bool(todo.any()):
-                fresh = self._l1_rows(d, rows[todo], new[todo], new_valid[todo])
-                l1[rows[todo]] = fresh
-                d.remember(rows[todo], key[todo], fresh)
-            self.rows_recomputed += int(todo.sum())
-            self.memo_hits += int(hit.sum())
-        else:
-            l1[rows] = self._l1_rows(d, rows, new, new_valid)
-            self.rows_recomputed += int(rows.numel())
+        same = key == d.set_key(old, old_valid)  # another rule already picked the new agent: same set
+        hit, known = d.recall(rows, key)
+        hit &= ~same
+        todo = ~(same | hit)
+        l1[rows[hit]] = known[hit]
+        if bool(todo.any()):
+            fresh = self._l1_rows(d, rows[todo], new[todo], new_valid[todo])
+            l1[rows[todo]] = fresh
+            d.remember(rows[todo], key[todo], fresh)
+        self.rows_recomputed += int(todo.sum())
+        self.memo_hits += int(hit.sum())
         deg_in = cur.deg_in.clone()
         deg_in[rows] = new_valid.sum(-1, dtype=torch.int32)
         # out-degree: the old picks of these rows lose one listener each, the new picks gain one
