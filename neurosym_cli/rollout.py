@@ -62,7 +62,7 @@ def rollout(
             state = state.detach()
         obs = env.observe(state, rng)
         ctx = CommContext(env, state, obs, rng)
-        out = policy(obs, lambda logits, r: comm.select(ctx, logits, r))
+        out = policy(obs, lambda logits, r: comm.select(ctx, logits, r), lambda r: comm.picks(ctx, r))
         state = env.step(state, out.action)
         costs.append(env.cost(state, out.action))
         if stats:

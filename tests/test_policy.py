@@ -129,3 +129,46 @@ def test_rollout_records_degrees_and_costs(gen):
         assert (traj.max_in == 2).all() and (traj.max_out >= 2).all()
         m = traj.episode_metrics()
         assert set(m) >= {"cost", "max_in", "max_out", "mean_degree", "collisions"}
+
+
+def test_sparse_picks_path_equals_dense_path_values_and_gradients():
+    """Giving the selection as picks (repeats and -1 included) computes the same function as the dense mask."""
+    from neurosym_cli.dsl.interpret import picks_to_mask
+
+    pol = _policy(rounds=2)
+    b, n = 3, 7
+    obs = _obs(b, n)
+    g = torch.Generator().manual_seed(1)
+    picks = torch.randint(-1, n, (b, n, 3), generator=g)
+    picks[..., 2] = picks[..., 0]  # a repeated pick counts once
+    picks[0, 0] = -1  # agent 0 of episode 0 hears nobody
+    eye = torch.arange(n).view(1, n, 1)
+    picks = torch.where(picks == eye, -1, picks)  # nobody picks itself
+    mask = picks_to_mask(picks, n)
+    grads = []
+    for sparse in (False, True):
+        obs_g = Observation(obs.agent.clone().requires_grad_(), obs.rel.clone().requires_grad_())
+        pol.zero_grad()
+        out = pol(obs_g, _fixed(mask), (lambda r: picks) if sparse else None)
+        out.action.square().sum().backward()
+        grads.append((out, obs_g.agent.grad, obs_g.rel.grad, pol.rounds[0].key_edge.weight.grad.clone()))
+    (dense, *gd), (sparse, *gs) = grads
+    assert torch.equal(sparse.masks[1], mask)
+    assert torch.allclose(sparse.action, dense.action, atol=1e-5)
+    assert torch.allclose(sparse.attn[0], dense.attn[0], atol=1e-6)
+    for a, c in zip(gd, gs):
+        assert torch.allclose(a, c, atol=1e-5)
+
+
+def test_providers_give_picks_matching_their_masks(gen):
+    env = make_env(TaskConfig(name="random-cross", noise_std=0.0))
+    s = env.reset(6, gen)[0]
+    obs = env.observe(s, Rng(gen, torch.device("cpu")))
+    ctx = CommContext(env, s, obs, Rng(gen, torch.device("cpu")))
+    logits = torch.zeros(s.batch, s.n_agents, s.n_agents)
+    from neurosym_cli.dsl.interpret import picks_to_mask
+
+    for comm in (NoComm(), NearestComm(3)):
+        assert torch.equal(picks_to_mask(comm.picks(ctx, 0), s.n_agents), comm.select(ctx, logits, 0))
+    assert FullComm().picks(ctx, 0) is None and TopKComm(2).picks(ctx, 0) is None
+    assert NoComm().picks(ctx, 0).shape == (s.batch, s.n_agents, 0)

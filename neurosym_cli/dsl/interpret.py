@@ -79,6 +79,18 @@ def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor
     return torch.where(found, pick.squeeze(-1), -1)
 
 
+def dedup_valid(picks: Tensor) -> Tensor:
+    """picks (..., K) with -1 for none -> (..., K) bool: valid and not a repeat of an earlier rule's pick."""
+    valid = [picks[..., 0] >= 0]
+    for k in range(1, picks.shape[-1]):  # K(K-1)/2 compares of (...) tensors beat one (..., K, K) broadcast
+        pk = picks[..., k]
+        dup = pk == picks[..., 0]
+        for m in range(1, k):
+            dup |= pk == picks[..., m]
+        valid.append((pk >= 0) & ~dup)
+    return torch.stack(valid, -1)
+
+
 def picks_to_mask(picks: Tensor, n: int) -> Tensor:
     """picks: (B, N, K) long with -1 for none -> (B, N, N) bool union of the picks."""
     b = picks.shape[0]
@@ -87,7 +99,11 @@ def picks_to_mask(picks: Tensor, n: int) -> Tensor:
     return mask[..., :n]
 
 
+def program_picks(p: Program, round: int, feats: FeatureView, rng: UniformSource | None) -> Tensor:
+    """(B, N, K) long: the agent each rule of the round picks for each agent i, -1 for nobody."""
+    return torch.stack([rule_picks(r, feats, rng) for r in p.rounds[round]], -1)
+
+
 def program_mask(p: Program, round: int, feats: FeatureView, rng: UniformSource | None) -> Tensor:
     """(B, N, N) bool: agent i hears j when one of the round's rules picks j (paper section 3.2)."""
-    picks = torch.stack([rule_picks(r, feats, rng) for r in p.rounds[round]], -1)  # (B, N, K)
-    return picks_to_mask(picks, feats.n_agents)
+    return picks_to_mask(program_picks(p, round, feats, rng), feats.n_agents)

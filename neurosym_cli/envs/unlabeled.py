@@ -12,6 +12,7 @@ import torch
 from torch import Tensor
 
 from ..config import TaskConfig
+from ..utils.ops import softmax_last
 from .base import EnvState, EpisodeSeeder, Observation, Rng, clip_speed, eye_mask, safe_norm
 from .sampling import sample_in_boxes
 
@@ -55,12 +56,12 @@ class UnlabeledGoalsEnv:
     def goal_weights(self, state: EnvState, action: Tensor) -> Tensor:
         """(B, N, G) softmax weights indexed by absolute goal id (the action is in each agent's own order)."""
         assert state.goal_order is not None
-        p = torch.softmax(action, -1)
+        p = softmax_last(action)
         return torch.zeros_like(p).scatter(-1, state.goal_order, p)
 
     def effective_action(self, action: Tensor) -> Tensor:
         """(B, N, G) the goal weights p_i: what synthesis imitates."""
-        return torch.softmax(action, -1)
+        return softmax_last(action)
 
     def step(self, state: EnvState, action: Tensor) -> EnvState:
         p = self.goal_weights(state, action)  # (B, N, G)

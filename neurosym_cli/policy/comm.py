@@ -1,7 +1,9 @@
 """Communication providers: every baseline of the paper is a rule that hands the transformer a mask.
 
 A provider answers, for each round, which agents j each agent i hears: a (B, N, N) bool mask, self excluded.
-The same transformer then attends over the selected agents only (paper section 3.3).
+The same transformer then attends over the selected agents only (paper section 3.3). Providers that know the
+selection before seeing any logit (no-comm, dist, prog) also give it as picks (B, N, K), so the transformer
+computes the K selected pairs only (see policy/transformer.py).
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from torch import Tensor
 
 from ..config import ConfigError
 from ..dsl.ast import Program
-from ..dsl.interpret import program_mask
+from ..dsl.interpret import picks_to_mask, program_picks
 from ..envs.base import EnvState, MultiAgentEnv, Observation, Rng, eye_mask
 from ..envs.features import PairFeatures
 
@@ -36,6 +38,17 @@ class CommProvider(Protocol):
         """logits: (B, N, N) the transformer's attention logits of this round -> (B, N, N) bool mask."""
         ...
 
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        """(B, N, K) long: the same selection as agent indices (-1 = nobody), or None if it needs the logits."""
+        ...
+
+
+class _Dense:
+    """Mixin for providers that choose from the logits: no picks."""
+
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        return None
+
 
 def _others(logits: Tensor) -> Tensor:
     b, n, _ = logits.shape
@@ -52,7 +65,7 @@ def _topk_mask(score: Tensor, k: int) -> Tensor:
     return mask.scatter(-1, score.topk(k, dim=-1).indices, True)
 
 
-class FullComm:
+class FullComm(_Dense):
     """tf-full: every agent hears every other agent (soft attention)."""
 
     name = "full"
@@ -69,8 +82,12 @@ class NoComm:
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
         return torch.zeros_like(logits, dtype=torch.bool)
 
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        b, n = ctx.obs.agent.shape[:2]
+        return torch.zeros(b, n, 0, dtype=torch.long, device=ctx.obs.agent.device)
 
-class TopKComm:
+
+class TopKComm(_Dense):
     """hard-attn: each agent hears the k others with the largest attention logits (in-degree k, every round)."""
 
     name = "topk"
@@ -91,7 +108,11 @@ class NearestComm:
         self.k = k
 
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
-        return _topk_mask(-ctx.env.true_distance(ctx.state), self.k)
+        return picks_to_mask(self.picks(ctx, round), ctx.state.n_agents)
+
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        d = ctx.env.true_distance(ctx.state)  # (B, N, N), +inf on the diagonal
+        return d.topk(max(min(self.k, d.shape[-1] - 1), 0), dim=-1, largest=False).indices
 
 
 class ProgramComm:
@@ -104,11 +125,14 @@ class ProgramComm:
         self.program, self.kind, self.features = program, kind, features
 
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return picks_to_mask(self.picks(ctx, round), ctx.obs.agent.shape[1])
+
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
         feats = PairFeatures(self.kind, ctx.obs.agent, ctx.obs.rel, self.features)
-        return program_mask(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
+        return program_picks(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
 
 
-class TreeComm:
+class TreeComm(_Dense):
     """dt: a decision tree per round decides, pair by pair, whom each agent hears (paper appendix B); no cap on
     the degrees at run time."""
 

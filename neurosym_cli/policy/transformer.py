@@ -10,6 +10,11 @@ Per round r, with h_i = ReLU(W_s s_i) the state embedding:
     output     y_i    = LN(z_i + FFN(z_i)),  z_i = LN(x_i + W_o sum_j a_ij m_j->i)   (post-LN, as the reference)
 Round 1 has x = h; round 2 has x = y of round 1 (the internal state of appendix A) while its keys and queries
 still come from the original state s_i. The action is a linear read-out of the last y.
+
+Two paths compute the same round. The dense one scores all N^2 pairs and lets the provider choose from the
+logits (tf-full, hard-attn). The sparse one serves providers that know whom each agent hears before any logit
+(no-comm, dist, prog): it computes keys, logits and messages only for the B N K picked pairs, which makes
+training under a degree-K provider N/K times lighter in its (B, N, N, D) work (docs/performance.md).
 """
 
 from __future__ import annotations
@@ -22,10 +27,16 @@ import torch
 from torch import Tensor, nn
 
 from ..config import ModelConfig
+from ..dsl.interpret import dedup_valid, picks_to_mask
 from ..envs.base import Observation
+from ..utils.ops import softmax_last
 
 Selector = Callable[[Tensor, int], Tensor]
 """(logits (B, N, N), round) -> mask (B, N, N) bool, True where agent i hears agent j."""
+
+PickSource = Callable[[int], "Tensor | None"]
+"""round -> (B, N, K) long: the agents each agent hears (-1 = nobody, repeats allowed), or None when the
+provider needs the logits to decide (dense path)."""
 
 NEG = -1e9  # finite, so rows where nobody is heard give zeros instead of NaN gradients
 
@@ -69,9 +80,36 @@ class CommRound(nn.Module):
         # the message j -> i uses the sender's view o_ji: transpose the 2-d input, not the D-wide output
         msg_edge = torch.relu(self.msg_edge(rel.transpose(1, 2)))  # (B, N, N, D): [i, j] from o_ji
         agg = torch.bmm(w, self.value(x)) + (w.unsqueeze(-1) * msg_edge).sum(2)  # (B, N, D)
+        return self._post(x, agg), attn
+
+    def aggregate_picks(self, x: Tensor, h: Tensor, rel: Tensor, picks: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+        """The round with its mask given as picks (B, N, K) long (-1 = nobody, repeats count once): the same
+        function as ``aggregate(x, logits(h, rel), mask)`` but computed on the picked pairs only.
+        Returns the round output (B, N, D), the weights (B, N, N) and the mask (B, N, N) bool."""
+        b, n, k = picks.shape
+        valid = dedup_valid(picks) if k else torch.zeros_like(picks, dtype=torch.bool)  # (B, N, K)
+        mask = picks_to_mask(torch.where(valid, picks, -1), n)
+        if k == 0:  # nobody is heard: the aggregate is zero and no logit or message is needed
+            return self._post(x, torch.zeros_like(x)), torch.zeros(b, n, n, device=x.device), mask
+        idx = picks.clamp(min=0)
+        q = self.query(h) * self.scale  # (B, N, D)
+        o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, 2))  # (B, N, K, 2): receiver i's view of j
+        logits = (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(2)).sum(-1)  # (B, N, K)
+        attn_k = softmax_last(logits.masked_fill(~valid, NEG)) * valid  # (B, N, K)
+        w = self.drop(attn_k)
+        # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
+        send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
+        o_ji = rel.reshape(b, n * n, 2).gather(1, send.expand(-1, -1, 2)).view(b, n, k, 2)
+        v = self.value(x)  # (B, N, D)
+        v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
+        agg = (w.unsqueeze(-1) * (v_j + torch.relu(self.msg_edge(o_ji)))).sum(2)  # (B, N, D)
+        attn = torch.zeros(b, n, n, device=x.device).scatter_add(-1, idx, attn_k)  # repeats carry weight 0
+        return self._post(x, agg), attn, mask
+
+    def _post(self, x: Tensor, agg: Tensor) -> Tensor:
+        """(B, N, D) round input and aggregate -> round output y (post-LN block)."""
         z = self.norm1(x + self.drop(self.out(agg)))
-        y = self.norm2(z + self.drop(self.ffn2(self.drop(torch.relu(self.ffn1(z))))))
-        return y, attn
+        return self.norm2(z + self.drop(self.ffn2(self.drop(torch.relu(self.ffn1(z))))))
 
 
 class CommTransformer(nn.Module):
@@ -84,14 +122,19 @@ class CommTransformer(nn.Module):
         self.rounds = nn.ModuleList(CommRound(cfg.width, cfg.ffn, cfg.dropout) for _ in range(rounds))
         self.head = nn.Linear(cfg.width, action_dim)
 
-    def forward(self, obs: Observation, select: Selector) -> PolicyOutput:
+    def forward(self, obs: Observation, select: Selector, picks: PickSource | None = None) -> PolicyOutput:
+        """``picks``, when given and not None for a round, replaces ``select`` there (sparse path)."""
         h = torch.relu(self.embed(obs.agent))  # (B, N, D)
         x = h
         attn, masks = [], []
         for r, layer in enumerate(self.rounds):
-            logits = layer.logits(h, obs.rel)
-            mask = select(logits.detach(), r)
-            x, a = layer.aggregate(x, logits, mask, obs.rel)
+            pk = picks(r) if picks is not None else None
+            if pk is None:
+                logits = layer.logits(h, obs.rel)
+                mask = select(logits.detach(), r)
+                x, a = layer.aggregate(x, logits, mask, obs.rel)
+            else:
+                x, a, mask = layer.aggregate_picks(x, h, obs.rel, pk)
             attn.append(a)
             masks.append(mask)
         return PolicyOutput(self.head(x), attn, masks)

@@ -23,7 +23,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from ..dsl.ast import Program, RandomRule, Rule
-from ..dsl.interpret import picks_to_mask, rule_picks
+from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
 from ..envs.base import MultiAgentEnv, Observation
 from ..envs.features import PairFeatures
 from ..policy.transformer import NEG, CommTransformer
@@ -45,18 +45,6 @@ class _Uniforms:
 
     def rand(self, batch: int, *shape: int) -> Tensor:
         return self.u
-
-
-def dedup_valid(picks: Tensor) -> Tensor:
-    """picks (..., K) with -1 for none -> (..., K) bool: valid and not a repeat of an earlier rule's pick."""
-    valid = [picks[..., 0] >= 0]
-    for k in range(1, picks.shape[-1]):  # K(K-1)/2 compares of (...) tensors beat one (..., K, K) broadcast
-        pk = picks[..., k]
-        dup = pk == picks[..., 0]
-        for m in range(1, k):
-            dup |= pk == picks[..., m]
-        valid.append((pk >= 0) & ~dup)
-    return torch.stack(valid, -1)
 
 
 def degree_counts(picks: Tensor, valid: Tensor, n: int) -> tuple[Tensor, Tensor]:
@@ -117,6 +105,16 @@ class _Prepared:
                          layer.out.weight)
                 for c in range(0, self.s, ch)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
         self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
+        # later rounds attend softly over everybody with logits from the original state, so their weights A and
+        # the message part C_i = sum_j a_ij ReLU(W_m o_ji) do not depend on the program: a later round is then
+        # one (N, N) x (N, D) product per state plus its post-attention block (appendix A, round r < last)
+        self.later: list[tuple[Tensor, Tensor]] = []
+        for q in range(round_idx + 1, policy.n_rounds):
+            lay = policy.rounds[q]
+            a = torch.softmax(self.logits[q].masked_fill(~others, NEG), -1) * others  # (S, N, N)
+            c = torch.cat([(a[c:c + ch, :, :, None] * torch.relu(lay.msg_edge(self.rel[c:c + ch].transpose(1, 2))))
+                           .sum(2) for c in range(0, self.s, ch)])  # (S, N, D)
+            self.later.append((a, c))
         self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
         self.uniforms: dict[tuple[int, int], Tensor] = {}
         # memo of each agent's L1 error per set of picked agents: a proposal often gives an agent a set it had
@@ -156,6 +154,7 @@ class _Current:
     deg_out: Tensor  # (S N,) int32
     l1_sum: float
     deg_sum: float
+    x: Tensor | None = None  # (S N, D) output of the synthesized round, when later rounds follow it
 
 
 class CachedScorer:
@@ -245,38 +244,41 @@ class CachedScorer:
         a = self.env.effective_action(self.policy.head(y))
         return (a - d.target_flat.index_select(0, rows)).abs().sum(-1)
 
-    def _l1_all(self, d: _Prepared, picks: Tensor, valid: Tensor) -> Tensor:
-        """(S N,) L1 error of every agent from picks, valid (S N, K); later rounds (soft attention) in full."""
-        rows = torch.arange(d.s * d.n, device=self.device)
-        if self.last_round:
-            return self._l1_rows(d, rows, picks, valid)
-        x = self._round_out(d, rows, picks, valid).reshape(d.s, d.n, -1)
-        for q in range(self.round + 1, self.policy.n_rounds):
-            x, _ = self.policy.rounds[q].aggregate(x, d.logits[q], d.others, d.rel)
-        a = self.env.effective_action(self.policy.head(x))
-        return (a - d.target).abs().sum(-1).flatten()
+    def _l1_later(self, d: _Prepared, x: Tensor) -> Tensor:
+        """(S N, D) output of the synthesized round -> (S N,) L1 error after the later (soft) rounds."""
+        y = x.view(d.s, d.n, -1)
+        for (a, c), layer in zip(d.later, self.policy.rounds[self.round + 1:]):
+            y = layer._post(y, torch.bmm(a, layer.value(y)) + c)
+        out = self.env.effective_action(self.policy.head(y))
+        return (out - d.target).abs().sum(-1).flatten()
 
     # ------------------------------------------------------------------------------------------ score
     def _full(self, d: _Prepared, picks: list[Tensor]) -> _Current:
         p = torch.stack(picks, -1).long()  # (S N, K)
         valid = dedup_valid(p)
-        l1 = self._l1_all(d, p, valid)
+        rows = torch.arange(d.s * d.n, device=self.device)
+        x = None
         if self.last_round:
-            d.remember(torch.arange(d.s * d.n, device=self.device), d.set_key(p, valid), l1)
+            l1 = self._l1_rows(d, rows, p, valid)
+            d.remember(rows, d.set_key(p, valid), l1)
+        else:
+            x = self._round_out(d, rows, p, valid)
+            l1 = self._l1_later(d, x)
         deg_in, deg_out = degree_counts(p.view(d.s, d.n, -1), valid.view(d.s, d.n, -1), d.n)
         deg = degree_from_counts(deg_in, deg_out, self.objective, self.cap)
         return _Current(picks, p.to(torch.int8), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
-                        float(deg.sum()))
+                        float(deg.sum()), x)
 
     def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
-        """Only the agents whose pick of a changed rule differs are recomputed (L1 and degree counts); last round
-        only, since an earlier round's picks change every agent's input to the next round."""
+        """Only the agents whose pick of a changed rule differs are recomputed (their round output, and their L1
+        and degree counts). Before the last round, a changed agent is heard by everybody in the next round, so the
+        later rounds are rerun on every agent, from the cached weights of ``_Prepared.later``."""
         diff = picks[changed[0]] != cur.picks[changed[0]]
         for k in changed[1:]:
             diff |= picks[k] != cur.picks[k]
         rows = diff.nonzero().squeeze(-1)  # (M,) flat (s, i)
         if rows.numel() == 0:
-            return _Current(picks, cur.table, cur.l1, cur.deg_in, cur.deg_out, cur.l1_sum, cur.deg_sum)
+            return _Current(picks, cur.table, cur.l1, cur.deg_in, cur.deg_out, cur.l1_sum, cur.deg_sum, cur.x)
         table = cur.table.clone()
         for k in changed:
             table[:, k] = picks[k]
@@ -284,18 +286,29 @@ class CachedScorer:
         new = table.index_select(0, rows).long()
         new_valid, old_valid = dedup_valid(new), dedup_valid(old)
         key = d.set_key(new, new_valid)
-        l1 = cur.l1.clone()
         same = key == d.set_key(old, old_valid)  # another rule already picked the new agent: same set
-        hit, known = d.recall(rows, key)
-        hit &= ~same
-        todo = ~(same | hit)
-        l1[rows[hit]] = known[hit]
-        if bool(todo.any()):
-            fresh = self._l1_rows(d, rows[todo], new[todo], new_valid[todo])
-            l1[rows[todo]] = fresh
-            d.remember(rows[todo], key[todo], fresh)
+        x = cur.x
+        if self.last_round:
+            l1 = cur.l1.clone()
+            hit, known = d.recall(rows, key)
+            hit &= ~same
+            todo = ~(same | hit)
+            l1[rows[hit]] = known[hit]
+            if bool(todo.any()):
+                fresh = self._l1_rows(d, rows[todo], new[todo], new_valid[todo])
+                l1[rows[todo]] = fresh
+                d.remember(rows[todo], key[todo], fresh)
+            self.memo_hits += int(hit.sum())
+        else:
+            todo = ~same
+            assert x is not None
+            if bool(todo.any()):
+                x = x.clone()
+                x[rows[todo]] = self._round_out(d, rows[todo], new[todo], new_valid[todo])
+                l1 = self._l1_later(d, x)
+            else:
+                l1 = cur.l1
         self.rows_recomputed += int(todo.sum())
-        self.memo_hits += int(hit.sum())
         deg_in = cur.deg_in.clone()
         deg_in[rows] = new_valid.sum(-1, dtype=torch.int32)
         # out-degree: the old picks of these rows lose one listener each, the new picks gain one
@@ -306,7 +319,7 @@ class CachedScorer:
         deg_out.index_add_(0, (s_n + new.clamp(min=0))[new_valid], torch.ones(int(new_valid.sum()),
                                                                                dtype=torch.int32))
         deg = degree_from_counts(deg_in.view(d.s, d.n), deg_out.view(d.s, d.n), self.objective, self.cap)
-        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg.sum()))
+        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg.sum()), x)
 
     @torch.no_grad()
     def score(self, rules: tuple[Rule, ...]) -> Score:
@@ -314,7 +327,7 @@ class CachedScorer:
         keys = tuple(self._key(r, k) for k, r in enumerate(rules))
         per_rule = [self.picks_of(r, k) for k, r in enumerate(rules)]
         changed = None
-        if self.current is not None and self.last_round and len(self.current[0]) == len(keys):
+        if self.current is not None and len(self.current[0]) == len(keys):
             changed = [k for k in range(len(keys)) if keys[k] != self.current[0][k]]
         states: list[list[_Current]] = []
         l1_sum, deg_sum = 0.0, 0.0

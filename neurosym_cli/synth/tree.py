@@ -16,6 +16,7 @@ from torch import Tensor
 
 from ..config import UserError
 from ..envs.features import PairFeatures
+from ..utils.ops import softmax_last
 from ..policy.transformer import CommTransformer
 from .dataset import DataBucket
 
@@ -29,7 +30,7 @@ def soft_attention(policy: CommTransformer, b: DataBucket, round_idx: int, chunk
         h = torch.relu(policy.embed(agent))
         logits = policy.rounds[round_idx].logits(h, rel)
         eye = torch.eye(b.n_agents, dtype=torch.bool)
-        out.append(torch.softmax(logits.masked_fill(eye, float("-inf")), -1))
+        out.append(softmax_last(logits.masked_fill(eye, float("-inf"))))
     return torch.cat(out)
 
 
@@ -85,25 +86,33 @@ class TreeModel:
             raise UserError(f"malformed tree file: {e}") from None
 
     @cached_property
-    def _arrays(self) -> tuple[Tensor, Tensor, Tensor, Tensor, Tensor]:
-        """The node arrays as tensors, built once (trees have thousands of nodes; predict runs every step)."""
-        return (torch.tensor(self.left), torch.tensor(self.right), torch.tensor(self.feature).clamp(min=0),
-                torch.tensor(self.threshold, dtype=torch.float32), torch.tensor(self.label))
+    def _arrays(self) -> tuple[Tensor, Tensor, Tensor, Tensor, int]:
+        """The node arrays as tensors, built once (trees have thousands of nodes; predict runs every step):
+        children (2 M,) with a leaf its own child on both sides, feature (M,), threshold (M,), label (M,), depth."""
+        left, right = torch.tensor(self.left), torch.tensor(self.right)
+        node = torch.arange(len(self.left))
+        leaf = left < 0
+        children = torch.stack([torch.where(leaf, node, left), torch.where(leaf, node, right)], -1).flatten()
+        depth, level = 0, torch.zeros(1, dtype=torch.long)
+        while bool((left[level] >= 0).any()):  # deepest leaf: the number of descents that reach every leaf
+            inner = level[left[level] >= 0]
+            level = torch.cat([left[inner], right[inner]])
+            depth += 1
+        return (children, torch.tensor(self.feature).clamp(min=0), torch.tensor(self.threshold, dtype=torch.float32),
+                torch.tensor(self.label), depth)
 
     def predict(self, feats: PairFeatures) -> Tensor:
         """(B, N, N) bool: the tree's decision for every pair (self removed by the caller's mask)."""
         b, n = feats.batch, feats.n_agents
         dev = feats.device
-        left, right, feat, thr, label = (a.to(dev) for a in self._arrays)
+        children, feat, thr, label = (a.to(dev) for a in self._arrays[:4])
         cols = torch.stack([feats[f].expand(b, n, n) for f in self.features], -1).flatten(0, 2)  # (B N N, F)
         node = torch.zeros(cols.shape[0], dtype=torch.long, device=dev)
-        active = torch.arange(cols.shape[0] if int(left[0]) >= 0 else 0, device=dev)  # pairs not yet at a leaf
-        while active.numel():
-            nd = node[active]
-            x = cols[active, feat[nd]]
-            nxt = torch.where(x <= thr[nd], left[nd], right[nd])
-            node[active] = nxt
-            active = active[left[nxt] >= 0]
+        # every pair descends the same number of levels: no compaction of the pairs still inside the tree, since
+        # a leaf is its own child; four gathers per level beat masking and scattering an active set
+        for _ in range(self._arrays[4]):
+            x = cols.gather(1, feat[node].unsqueeze(1)).squeeze(1)  # (B N N,) the tested feature of each pair
+            node = children[2 * node + (x > thr[node])]
         return label[node].view(b, n, n)
 
 
