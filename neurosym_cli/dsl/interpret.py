@@ -59,6 +59,10 @@ def cond(c: Cond, feats: FeatureView) -> Tensor:
     raise TypeError(f"not a condition: {c!r}")
 
 
+OUT = -1e30  # added to the score of agents a filter rejects; finite, since -inf * 0 is NaN
+_OUT = torch.tensor(OUT)
+
+
 def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor:
     """(B, N) long: the agent each agent i asks under rule r, or -1 when its filter passes nobody."""
     b, n = feats.batch, feats.n_agents
@@ -71,12 +75,13 @@ def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor
         score = rng.rand(b, n, n)  # the argmax of iid uniforms over the passing agents is a uniform pick
     else:
         raise TypeError(f"not a rule: {r!r}")
-    masked = score.masked_fill(~passing, float("-inf"))  # a new tensor: the diagonal may be written in place
-    masked.diagonal(dim1=-2, dim2=-1).fill_(float("-inf"))  # nobody asks itself
-    pick = masked.argmax(-1, keepdim=True)  # (B, N, 1)
-    # the filter passes somebody iff the argmax is finite (cheaper than any() over all pairs)
-    found = masked.gather(-1, pick).squeeze(-1) > float("-inf")
-    return torch.where(found, pick.squeeze(-1), -1)
+    # failing agents get OUT added rather than masked_fill(-inf): masked_fill and where with a scalar are ~4x
+    # slower than this on CPU (measured on (6000, 30, 30): 22 ms vs 6 ms, one thread)
+    masked = torch.addcmul(score, (~passing).to(score.dtype), _OUT.to(score.device))  # a new tensor
+    masked.diagonal(dim1=-2, dim2=-1).fill_(OUT)  # nobody asks itself
+    best, pick = masked.max(-1)  # (B, N) each; one pass gives both, faster than argmax plus a gather
+    # the filter passes somebody iff the best score is a real one
+    return torch.where(best > OUT / 2, pick, -1)
 
 
 def dedup_valid(picks: Tensor) -> Tensor:
