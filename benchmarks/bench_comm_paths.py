@@ -1,0 +1,109 @@
+"""Training step cost under each communication provider: the dense path (all N^2 pairs scored, then masked) vs
+the sparse path (only the K picked pairs computed), side by side in one process.
+
+    python benchmarks/bench_comm_paths.py                 # random-grid and random-cross, paper sizes
+    python benchmarks/bench_comm_paths.py --episodes 4 --horizon 20   # a quick look
+
+One training step = a rollout of `episodes` episodes over `horizon` steps with gradients, then backward, as in
+`fit` (paper budget: 50 rollouts per batch cut into 4 steps of ~13). The dense column forces the mask path for
+providers that could give picks; both paths compute the same function (tests/test_policy.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import torch
+import yaml
+
+from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.dsl.parser import parse
+from neurosym_cli.envs import Rng, make_env
+from neurosym_cli.policy import make_comm
+from neurosym_cli.policy.comm import ProgramComm
+from neurosym_cli.policy.transformer import CommTransformer
+from neurosym_cli.rollout import rollout
+
+ROOT = Path(__file__).resolve().parent.parent
+PROGRAMS = {  # the programs the paper-budget searches found on 2026-11-25 (docs/results.md), for realistic picks
+    "random-grid": "argmax(map(-1.0*theta, filter(gx <= -9.04, l)))\nargmax(map(-1.0*d, filter(gd >= 2.51, l)))",
+    "random-cross": "\n".join([
+        "random(filter(dy >= 1.17 and gtheta >= 0.64, l))", "random(filter(gx >= 6.86 and gtheta >= -2.68, l))",
+        "argmax(map(-1.0*d, filter(d >= 1.29 or theta <= -0.34, l)))",
+        "random(filter(gd <= 11.01 and gtheta <= -2.78, l))", "random(filter(gd >= 3.82, l))"]),
+}
+
+
+class Dense:
+    """A provider seen through its mask only (picks withheld): forces the dense path."""
+
+    def __init__(self, inner):
+        self.inner, self.name = inner, inner.name
+
+    def select(self, ctx, logits, r):
+        return self.inner.select(ctx, logits, r)
+
+    def picks(self, ctx, r):
+        return None
+
+
+def task_config(name: str) -> TaskConfig:
+    raw = yaml.safe_load((ROOT / "conf" / "task" / f"{name}.yaml").read_text())
+    fields = {f.name for f in dataclasses.fields(TaskConfig)}
+    return TaskConfig(**{k: v for k, v in raw.items() if k in fields})
+
+
+def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int) -> float:
+    env = make_env(task)
+    torch.manual_seed(0)
+    pol = CommTransformer(env.obs_dim, env.action_dim, task.rounds, ModelConfig())
+    g = torch.Generator().manual_seed(0)
+    rng = Rng(g, torch.device("cpu"))
+    bucket = max(env.reset(episodes, g), key=lambda b: b.batch)
+    best = float("inf")
+    for _ in range(repeats + 1):  # the first is a warm-up
+        t0 = time.perf_counter()
+        traj = rollout(env, pol, comm, bucket, rng, horizon, task.detach_state, stats=False)
+        traj.cost.sum().backward()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--tasks", nargs="+", default=["random-grid", "random-cross"])
+    ap.add_argument("--episodes", type=int, default=13)
+    ap.add_argument("--horizon", type=int, default=0, help="0 = the task's")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--json", default="")
+    a = ap.parse_args()
+    torch.set_num_threads(a.threads)
+    rows = []
+    print("| task | provider | dense s/step | sparse s/step | dense / sparse | vs tf-full |")
+    print("|---|---|---:|---:|---:|---:|")
+    for name in a.tasks:
+        task = task_config(name)
+        horizon = a.horizon or task.horizon
+        full = step_seconds(task, make_comm("full", task.rules), a.episodes, horizon, a.repeats)
+        rows.append({"task": name, "provider": "full", "dense_s": full})
+        print(f"| {name} | tf-full | {full:.3f} | - | - | 1.00 |", flush=True)
+        program = ProgramComm(parse(PROGRAMS.get(name, PROGRAMS["random-cross"])), task.kind)
+        for label, comm in (("no-comm", make_comm("none", task.rules)),
+                            (f"dist (K = {task.rules})", make_comm("nearest", task.rules)),
+                            ("prog", program)):
+            dense = step_seconds(task, Dense(comm), a.episodes, horizon, a.repeats)
+            sparse = step_seconds(task, comm, a.episodes, horizon, a.repeats)
+            rows.append({"task": name, "provider": label, "dense_s": dense, "sparse_s": sparse})
+            print(f"| {name} | {label} | {dense:.3f} | {sparse:.3f} | {dense / sparse:.2f}x | {sparse / full:.2f} |",
+                  flush=True)
+    if a.json:
+        Path(a.json).write_text(json.dumps({"episodes": a.episodes, "threads": a.threads, "rows": rows}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
