@@ -130,7 +130,7 @@ def section(task: str, exp: Path, figures: Path | None, lam: float | None = None
     if timing.exists() and not variant:
         t = json.loads(timing.read_text())
         total = sum(t.values())
-        out += ["Wall time per stage (one CPU thread, two pipelines sharing the 2 cores):", "",
+        out += ["Wall time per stage (one CPU thread each, two stages at a time on the 2 cores):", "",
                 "| stage | seconds |", "|---|---|"] + [f"| {k} | {v:.0f} |" for k, v in t.items()]
         out += [f"| **total** | **{total:.0f}** ({total / 60:.1f} min) |", ""]
     out += ["Claims of the paper:", ""] + claims(task, r) + [""]
