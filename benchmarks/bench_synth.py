@@ -4,8 +4,9 @@
     python benchmarks/bench_synth.py --rollouts 30 --steps 300   # a quick look
 
 Both scorers run in the same process on the same dataset D (oracle rollouts; the weights do not change the
-cost) and the same programs. Prints the dataset size, proposals/s of a real MCMC run with the cached scorer,
-seconds per proposal of the full forward pass, their ratio, and the projected time of 10k MCMC steps.
+cost) and the same programs. Prints the dataset size, proposals/s of a real MCMC run with the cached scorer (by
+default with each back-end, numba and torch, on the same search), seconds per proposal of the full forward
+pass, their ratio, and the projected time of 10k MCMC steps.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ def main() -> None:
     ap.add_argument("--full", type=int, default=3, help="proposals timed with the full-forward scorer")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--device", default="cpu")
+    ap.add_argument("--backend", default="both", choices=["both", "numba", "torch", "auto"],
+                    help="cached scorer back-end(s) to time; both = numba and torch side by side")
     ap.add_argument("--json", default="")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
@@ -50,32 +53,38 @@ def main() -> None:
     pairs = sum(b.states * b.n_agents ** 2 for b in data)
     print(f"dataset: {a.rollouts} rollouts, stride {a.stride}: {states} states, {pairs / 1e6:.1f}M agent pairs "
           f"(collected in {time.perf_counter() - t0:.0f} s)")
-    t0 = time.perf_counter()
-    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", a.rules, 1,
-                      torch.Generator().manual_seed(1), dev)
-    space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), a.rules)
-    prep = time.perf_counter() - t0
-    print(f"cached scorer set-up (embeddings, logits, values, features): {prep:.1f} s")
-    rng = random.Random(0)
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, a.steps, 1, 0.0, 0.1, rng)
-    inc_rate = res.proposals_per_second
-    print(f"cached incremental scorer: {inc_rate:8.1f} proposals/s  ({1000 / inc_rate:.1f} ms each); "
-          f"rows recomputed per proposal: {sc.rows_recomputed / a.steps / 1e3:.1f}k of {states * 20.6 / 1e3:.0f}k")
+    rates, setups, rows = {}, {}, {}
+    backends = ["numba", "torch"] if a.backend == "both" else [a.backend]
+    for backend in backends:  # the same search (seed, programs) with each back-end of the cached scorer
+        t0 = time.perf_counter()
+        sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", a.rules, 1,
+                          torch.Generator().manual_seed(1), dev, backend=backend)
+        space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), a.rules)
+        setups[backend] = time.perf_counter() - t0
+        rng = random.Random(0)
+        res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, a.steps, 1, 0.0, 0.1,
+                         rng)
+        rates[backend] = res.proposals_per_second
+        rows[backend] = sc.rows_recomputed / a.steps
+        print(f"cached scorer ({backend:5s}): {rates[backend]:8.1f} proposals/s  ({1000 / rates[backend]:.1f} ms each; "
+              f"set-up {setups[backend]:.1f} s); agents recomputed per proposal: {rows[backend] / 1e3:.1f}k of "
+              f"{sum(b.states * b.n_agents for b in data) / 1e3:.0f}k; best objective {res.best_score.total:.4f}")
     progs = [Program((random_rules(space, rng),)) for _ in range(a.full)]
     t0 = time.perf_counter()
     for p in progs:
         sc.full_score(p)
     full_s = (time.perf_counter() - t0) / a.full
-    print(f"full-forward scorer:       {full_s:8.2f} s per proposal "
+    print(f"full-forward scorer:         {full_s:8.2f} s per proposal "
           f"({full_s / (pairs / 1e6):.2f} s per million pairs)")
-    ratio = full_s * inc_rate
-    print(f"speed-up: {ratio:.0f}x;  10k MCMC steps: cached {1e4 / inc_rate / 60:.1f} min (+{prep:.0f} s set-up), "
-          f"full-forward {1e4 * full_s / 3600:.1f} h")
+    for backend, rate in rates.items():
+        print(f"speed-up ({backend}): {full_s * rate:.0f}x;  10k MCMC steps: cached {1e4 / rate / 60:.1f} min "
+              f"(+{setups[backend]:.0f} s set-up), full-forward {1e4 * full_s / 3600:.1f} h")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"rollouts": a.rollouts, "stride": a.stride, "states": states, "pairs": pairs,
-                       "setup_s": prep, "cached_proposals_per_s": inc_rate, "full_s_per_proposal": full_s,
-                       "speedup": ratio, "threads": a.threads, "device": a.device}, f, indent=2)
+                       "setup_s": setups, "cached_proposals_per_s": rates, "rows_recomputed_per_proposal": rows,
+                       "full_s_per_proposal": full_s, "speedup": {b: full_s * r for b, r in rates.items()},
+                       "threads": a.threads, "device": a.device}, f, indent=2)
 
 
 if __name__ == "__main__":

@@ -222,6 +222,9 @@ class SynthConfig:
     """samples of every random rule used to estimate the expected objective (common random numbers)"""
     max_depth: int = 2
     """filter depth: 1 = single tests, 2 = and/or of two tests"""
+    backend: str = "auto"
+    """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
+    auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
 
     def __post_init__(self) -> None:
         _check(self.stride > 0, "synth.stride must be positive")
@@ -231,6 +234,7 @@ class SynthConfig:
         _check(self.objective in ("paper", "hinge"), "synth.objective must be paper or hinge")
         _check(self.random_samples > 0, "synth.random_samples must be positive")
         _check(self.max_depth in (1, 2), "synth.max_depth must be 1 or 2")
+        _check(self.backend in ("auto", "numba", "torch"), "synth.backend must be auto, numba or torch")
 
 
 @dataclass

@@ -125,6 +125,7 @@ def test_same_seed_same_model(tmp_path):
     (["train", "budget=tiny", "budget.train_rollouts=abc"], "train_rollouts"),
     (["eval", "budget=tiny", "baseline=dist"], "neurosym train task=random-cross baseline=dist"),
     (["frobnicate"], "unknown command"),
+    (["synth", "budget=tiny", "synth.backend=fortran"], "synth.backend must be auto, numba or torch"),
 ])
 def test_bad_input_is_one_clear_error(tmp_path, args, needle):
     p = run(args, tmp_path, check=False)
@@ -170,6 +171,10 @@ def test_synth_show_program_eval_smoke(tmp_path):
     (out / "program.txt").write_text("# stale\n" + text)
     run(["synth", "task=random-grid", "budget=tiny", "overwrite=true"], tmp_path)
     assert (out / "program.txt").read_text() == text
+    # the torch back-end of the scorer runs the same search: the same program and objective, byte for byte
+    run(["synth", "task=random-grid", "budget=tiny", "overwrite=true", "synth.backend=torch"], tmp_path)
+    assert (out / "program.txt").read_text() == text
+    assert json.loads((out / "summary.json").read_text())["rounds"][0]["backend"] == "torch"
 
 
 def test_synth_two_rounds_and_sweep(tmp_path):

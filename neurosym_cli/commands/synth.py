@@ -53,6 +53,18 @@ def _dataset(cfg: RunConfig, env, policy, device):
     return data
 
 
+def _backend(name: str, device: torch.device) -> str:
+    """synth.backend, checked against this machine: numba needs the package and a CPU device."""
+    from ..synth import kernels
+
+    if name == "numba" and not kernels.AVAILABLE:
+        raise ConfigError("synth.backend=numba needs numba (pip install numba), or use synth.backend=auto")
+    if name == "numba" and device.type != "cpu":
+        raise ConfigError(f"synth.backend=numba runs on the CPU only; this run uses device {device} "
+                          "(use synth.backend=auto or device=cpu)")
+    return name
+
+
 def run(cfg: RunConfig, ctx: Context) -> dict:
     if cfg.baseline.comm not in ("program", "tree"):
         raise ConfigError(f"synth makes programs (baseline=prog, det-prog) or trees (baseline=dt), "
@@ -77,7 +89,8 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
     for r in range(cfg.task.rounds):
         # appendix A: each round's program is searched alone, the other rounds keep soft attention
         scorer = CachedScorer(policy, env, cfg.task.kind, data, r, cfg.features, cfg.lam, cfg.synth.objective,
-                              cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device)
+                              cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
+                              backend=_backend(cfg.synth.backend, device))
         label = f"synth {cfg.task.name} {paths.program_tag(cfg)}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         with SearchDisplay(label, spec.steps, cfg.lam, rich) as disp:
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{paths.program_tag(cfg)}",
@@ -89,6 +102,7 @@ def run(cfg: RunConfig, ctx: Context) -> dict:
                        "degree": res.best_score.degree, "seconds": res.seconds,
                        "proposals_per_second": res.proposals_per_second, "acceptance": res.acceptance(),
                        "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
+                       "backend": "numba" if scorer.compiled else "torch",
                        "full_forward_check": None if full is None else full.total})
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"

@@ -59,6 +59,23 @@ class PairFeatures:
             self._cache[name] = self._compute(name)
         return self._cache[name]
 
+    def stacked(self) -> tuple[list[str], list[str], "np.ndarray", "np.ndarray"]:
+        """(pair feature names, agent feature names, pair values (P, B N N), agent values (A, B N)) as float32
+        numpy arrays on the CPU (for compiled rule scans); the view then serves its features from these arrays."""
+        import numpy as np
+
+        b, n = self.batch, self.n_agents
+        pair = [nm for nm in self.names if self[nm].shape[-1] != 1 or n == 1]
+        agent = [nm for nm in self.names if nm not in pair]
+        fp = torch.stack([self[nm].expand(b, n, n).reshape(-1) for nm in pair]).float().contiguous()
+        fa = (torch.stack([self[nm].reshape(-1) for nm in agent]).float().contiguous() if agent
+              else torch.zeros(0, b * n))
+        for k, nm in enumerate(pair):
+            self._cache[nm] = fp[k].view(b, n, n)
+        for k, nm in enumerate(agent):
+            self._cache[nm] = fa[k].view(b, n, 1)
+        return pair, agent, fp.numpy(), fa.numpy()
+
     def _compute(self, name: str) -> Tensor:
         if name not in self.names:
             raise KeyError(f"unknown feature {name!r}; this task has: {', '.join(self.names)}")

@@ -11,6 +11,11 @@ vectors, features, and the uniforms of random rules: common random numbers), eva
 proposal changed (each rule's picks are cached), and recomputes the action only for the agents whose set of
 picked agents changed, aggregating over the <= K picked agents instead of all N. ``full_score`` is the
 reference-style scorer (a full forward pass of the transformer over D) used to check it and to benchmark it.
+
+On a CPU with numba (``backend=auto``), two parts run as compiled kernels (``kernels.py``): a rule's picks scan
+each agent's candidates in a precomputed order (by score feature, or by a random rule's uniforms) and stop at the
+first one the filter passes, instead of testing all N^2 pairs; and a proposal's bookkeeping (which agents'
+sets changed, memo, degree counts) is one pass over the agents instead of some fifty tensor operations.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from __future__ import annotations
 from collections import OrderedDict
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 from torch import Tensor
@@ -27,6 +33,7 @@ from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
 from ..envs.base import MultiAgentEnv, Observation
 from ..envs.features import PairFeatures
 from ..policy.transformer import NEG, CommTransformer
+from . import kernels
 from .dataset import DataBucket
 
 
@@ -126,6 +133,31 @@ class _Prepared:
         rows = self.s * self.n if memo else 0
         self.memo_key = torch.zeros(rows, MEMO, dtype=torch.int64, device=device)
         self.memo_l1 = torch.zeros(rows, MEMO, device=device)
+        self.todo: tuple[Tensor, Tensor, Tensor, Tensor] | None = None  # scratch of the compiled path
+        self.scan: tuple[list[str], list[str], np.ndarray, np.ndarray] | None = None
+        self.orders: dict[tuple, np.ndarray] = {}
+
+    def scan_inputs(self) -> tuple[list[str], list[str], np.ndarray, np.ndarray]:
+        """(pair names, agent names, pair features (P, S N N), agent features (A, S N)) for kernels.scan_picks;
+        the stacked tensors replace the feature view's own copies, so memory is not doubled."""
+        if self.scan is None:
+            self.scan = self.feats.stacked()
+        return self.scan
+
+    def order(self, key: tuple, values: Tensor | None = None) -> np.ndarray:
+        """(S N, N) int8 candidates of every agent, best first, ties by lower index (torch's max): by a pair
+        feature's value (key ("score", name, descending)) or by the given uniforms (key ("random", position, r))."""
+        if key not in self.orders:
+            if key[0] == "score":
+                pair, _, fp, _ = self.scan_inputs()
+                v = torch.from_numpy(fp[pair.index(key[1])])
+                values = -v if key[2] else v
+            else:
+                assert values is not None
+                values = -values
+            idx = torch.sort(values.reshape(-1, self.n), stable=True).indices
+            self.orders[key] = idx.to(torch.int8).numpy()
+        return self.orders[key]
 
     def set_key(self, picks: Tensor, valid: Tensor) -> Tensor:
         """(M, K) picks and valid -> (M,) int64 name of each row's set of picked agents."""
@@ -162,8 +194,14 @@ class CachedScorer:
 
     def __init__(self, policy: CommTransformer, env: MultiAgentEnv, kind: str, buckets: list[DataBucket],
                  round_idx: int, version: str, lam: float, objective: str, cap: int, samples: int,
-                 gen: torch.Generator, device: torch.device, cache_size: int = 256):
+                 gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto"):
         self.policy = policy.eval()
+        if backend not in ("auto", "numba", "torch"):
+            raise ValueError(f"backend must be auto, numba or torch, got {backend!r}")
+        if backend == "numba" and not (kernels.AVAILABLE and device.type == "cpu"):
+            raise ValueError("backend=numba needs numba installed and a CPU device")
+        # compiled bookkeeping and rule scans on CPU; torch elsewhere (GPUs, no numba) and as the reference
+        self.compiled = backend != "torch" and kernels.AVAILABLE and device.type == "cpu"
         self.env, self.round, self.lam, self.objective, self.cap = env, round_idx, lam, objective, cap
         self.samples, self.device = samples, device
         # every (bucket, rule position, sample) draws its uniforms from its own seed: random rules at different
@@ -203,6 +241,10 @@ class CachedScorer:
             return self.rule_cache[key]
         out = []
         for bi, d in enumerate(self.data):
+            compiled = self._compiled_picks(bi, rule, position) if self.compiled else None
+            if compiled is not None:
+                out.append(compiled)
+                continue
             if isinstance(rule, RandomRule):
                 ps = [rule_picks(rule, d.feats, _Uniforms(self._uniforms(bi, position, r)))
                       for r in range(self.samples)]
@@ -212,6 +254,25 @@ class CachedScorer:
         self.rule_cache[key] = out
         if len(self.rule_cache) > self.cache_size:
             self.rule_cache.popitem(last=False)
+        return out
+
+    def _compiled_picks(self, bi: int, rule: Rule, position: int) -> Tensor | None:
+        """(R, S N) int8 picks of one rule by kernels.scan_picks, or None where the kernel does not cover it."""
+        d = self.data[bi]
+        pair, agent, fp, fa = d.scan_inputs()
+        spec = kernels.rule_spec(rule, pair, agent)
+        if spec is None:
+            return None
+        out = torch.empty(self.samples if isinstance(rule, RandomRule) else 1, d.s * d.n, dtype=torch.int8)
+        for r in range(out.shape[0]):
+            if spec.order is None:
+                order = np.zeros((1, 1), np.int8)
+            elif spec.order[0] == "random":
+                order = d.order(("random", position, r), self._uniforms(bi, position, r))
+            else:
+                order = d.order(spec.order)
+            kernels.scan_picks(fp, fa, d.n, spec.op, spec.feat, spec.w, spec.nterm, spec.thr, spec.agent_level,
+                               order, spec.order is None, out[r].numpy())
         return out
 
     # ---------------------------------------------------------------------------------------- forward
@@ -268,6 +329,30 @@ class CachedScorer:
         deg = degree_from_counts(deg_in, deg_out, self.objective, self.cap)
         return _Current(picks, p.to(torch.int8), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
                         float(deg.sum()), x)
+
+    def _incremental_compiled(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
+        """``_incremental`` for the last round with the bookkeeping in one compiled pass over the agents
+        (kernels.incremental_rows); only the forward pass of the agents whose set changed stays in torch."""
+        table, l1 = cur.table.clone(), cur.l1.clone()
+        deg_in, deg_out = cur.deg_in.clone(), cur.deg_out.clone()
+        r_total, k_rules = table.shape
+        if d.todo is None:  # per-bucket scratch: rows, picks, valid and set names of the agents to recompute
+            d.todo = (torch.empty(r_total, dtype=torch.int64), torch.empty(r_total, k_rules, dtype=torch.int64),
+                      torch.empty(r_total, k_rules, dtype=torch.bool), torch.empty(r_total, dtype=torch.int64))
+        rows, new, valid, keys = d.todo
+        new_cols = torch.stack([picks[k] for k in changed])  # (C, R) int8
+        m, hits = kernels.incremental_rows(
+            new_cols.numpy(), np.asarray(changed, dtype=np.int64), table.numpy(), d.n, d.codes.numpy(),
+            d.memo_key.numpy(), d.memo_l1.numpy(), l1.numpy(), deg_in.numpy(), deg_out.numpy(),
+            rows.numpy(), new.numpy(), valid.numpy(), keys.numpy())
+        if m:
+            fresh = self._l1_rows(d, rows[:m], new[:m], valid[:m])
+            kernels.store_rows(rows[:m].numpy(), keys[:m].numpy(), fresh.numpy(), l1.numpy(), d.memo_key.numpy(),
+                               d.memo_l1.numpy())
+        self.rows_recomputed += m
+        self.memo_hits += hits
+        deg = kernels.degree_sum(deg_in.numpy(), deg_out.numpy(), d.n, self.objective == "hinge", self.cap)
+        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg), None)
 
     def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
         """Only the agents whose pick of a changed rule differs are recomputed (their round output, and their L1
@@ -337,6 +422,8 @@ class CachedScorer:
                 picks = [p[bi][min(r, p[bi].shape[0] - 1)] for p in per_rule]  # deterministic rules broadcast
                 if changed is None:
                     c = self._full(d, picks)
+                elif changed and self.compiled and self.last_round:
+                    c = self._incremental_compiled(d, self.current[1][bi][r], picks, changed)  # type: ignore[index]
                 elif changed:
                     c = self._incremental(d, self.current[1][bi][r], picks, changed)  # type: ignore[index]
                 else:
