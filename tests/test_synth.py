@@ -2,6 +2,7 @@
 
 import random
 
+import pytest
 import torch
 
 from neurosym_cli.config import ModelConfig, TaskConfig
@@ -198,8 +199,6 @@ def test_compiled_rule_scans_equal_the_torch_evaluator():
     from neurosym_cli.synth import kernels
 
     if not kernels.AVAILABLE:
-        import pytest
-
         pytest.skip("numba not installed")
     env, pol, data = _setup()
     fast = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
@@ -215,18 +214,25 @@ def test_compiled_rule_scans_equal_the_torch_evaluator():
     assert covered > 100  # most rules went through the kernel
 
 
-def test_compiled_and_torch_scorers_run_the_same_search():
-    """Same seed, both back-ends: the same objective at every step (to float tolerance), the same best program."""
+@pytest.mark.parametrize("case", ["cross", "unlabeled-round1"])
+def test_compiled_and_torch_scorers_run_the_same_search(case):
+    """Same seed, both back-ends: the same objective at every step (to float tolerance), the same best program;
+    also for the first of two rounds (its later round is recomputed for everybody)."""
     from neurosym_cli.synth import kernels
 
     if not kernels.AVAILABLE:
-        import pytest
-
         pytest.skip("numba not installed")
-    env, pol, data = _setup()
+    if case == "cross":
+        env, pol, data = _setup()
+        kind, rnd, objective = "formation", 0, "paper"
+    else:
+        task = TaskConfig(name="u", kind="unlabeled", horizon=6, rounds=2, collision_weight=0.0,
+                          collision_inter_group_weight=0.0, agents_per_group=5)
+        env, pol, data = _setup(task, rounds=2, rollouts=3)
+        kind, rnd, objective = "unlabeled", 0, "hinge"
     runs = []
     for backend in ("numba", "torch"):
-        sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 3, 1,
+        sc = CachedScorer(pol, env, kind, data, rnd, "v1", 0.5, objective, 3, 1,
                           torch.Generator().manual_seed(1), CPU, backend=backend)
         space = _space(sc, 3)
         rng = random.Random(5)
@@ -239,3 +245,4 @@ def test_compiled_and_torch_scorers_run_the_same_search():
     for x, y in zip(a.trace, b.trace):
         assert abs(x["objective"] - y["objective"]) <= 1e-4 * max(1.0, abs(y["objective"]))
     assert sa.rows_recomputed == sb.rows_recomputed and sa.memo_hits == sb.memo_hits
+    assert sa.rows_recomputed > 0

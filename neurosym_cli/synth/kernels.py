@@ -4,7 +4,7 @@ that scans each agent's candidates in a precomputed order and stops at the first
 
 Every kernel computes exactly what the torch code of ``objective.py`` and ``dsl/interpret.py`` computes (the
 tests compare them); the torch path stays the reference and serves GPUs and machines without numba.
-Shapes: R = S N flat agent rows of a bucket, K rules, N agents, C changed rules, Q candidates (N - 1 or all).
+Shapes: R = S N flat agent rows of a bucket, K rules, N agents, C changed rules.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dsl.ast import And, Or, RandomRule, Rule, Test, TrueCond
+from ..dsl.ast import And, Or, RandomRule, Rule, Test, TrueCond, rule_features
 
 try:  # numba is a dependency, but the scorer falls back to torch where it cannot be imported
     from numba import njit
@@ -252,8 +252,6 @@ def rule_spec(rule: Rule, pair: list[str], agent: list[str]) -> RuleSpec | None:
     """Compile a rule over the named pair and agent features; None when ``scan_picks`` does not cover it (deeper
     filters, or an argmax over a sum of pair features: those stay with the torch evaluator)."""
     ids = {nm: k for k, nm in enumerate(pair)} | {nm: len(pair) + k for k, nm in enumerate(agent)}
-    from ..dsl.ast import rule_features
-
     if not rule_features(rule) <= ids.keys():
         return None  # the torch evaluator names the unknown feature
     c = rule.cond

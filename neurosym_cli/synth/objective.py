@@ -331,8 +331,9 @@ class CachedScorer:
                         float(deg.sum()), x)
 
     def _incremental_compiled(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
-        """``_incremental`` for the last round with the bookkeeping in one compiled pass over the agents
-        (kernels.incremental_rows); only the forward pass of the agents whose set changed stays in torch."""
+        """``_incremental`` with the bookkeeping in one compiled pass over the agents (kernels.incremental_rows);
+        only the forward pass of the agents whose set changed (and, before the last round, the later rounds)
+        stays in torch."""
         table, l1 = cur.table.clone(), cur.l1.clone()
         deg_in, deg_out = cur.deg_in.clone(), cur.deg_out.clone()
         r_total, k_rules = table.shape
@@ -341,18 +342,24 @@ class CachedScorer:
                       torch.empty(r_total, k_rules, dtype=torch.bool), torch.empty(r_total, dtype=torch.int64))
         rows, new, valid, keys = d.todo
         new_cols = torch.stack([picks[k] for k in changed])  # (C, R) int8
-        m, hits = kernels.incremental_rows(
+        m, hits = kernels.incremental_rows(  # the memo is empty (no slots) before the last round
             new_cols.numpy(), np.asarray(changed, dtype=np.int64), table.numpy(), d.n, d.codes.numpy(),
             d.memo_key.numpy(), d.memo_l1.numpy(), l1.numpy(), deg_in.numpy(), deg_out.numpy(),
             rows.numpy(), new.numpy(), valid.numpy(), keys.numpy())
-        if m:
+        x = cur.x
+        if m and self.last_round:
             fresh = self._l1_rows(d, rows[:m], new[:m], valid[:m])
             kernels.store_rows(rows[:m].numpy(), keys[:m].numpy(), fresh.numpy(), l1.numpy(), d.memo_key.numpy(),
                                d.memo_l1.numpy())
+        elif m:
+            assert x is not None
+            x = x.clone()
+            x[rows[:m]] = self._round_out(d, rows[:m], new[:m], valid[:m])
+            l1 = self._l1_later(d, x)
         self.rows_recomputed += m
         self.memo_hits += hits
         deg = kernels.degree_sum(deg_in.numpy(), deg_out.numpy(), d.n, self.objective == "hinge", self.cap)
-        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg), None)
+        return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg), x)
 
     def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
         """Only the agents whose pick of a changed rule differs are recomputed (their round output, and their L1
@@ -422,7 +429,7 @@ class CachedScorer:
                 picks = [p[bi][min(r, p[bi].shape[0] - 1)] for p in per_rule]  # deterministic rules broadcast
                 if changed is None:
                     c = self._full(d, picks)
-                elif changed and self.compiled and self.last_round:
+                elif changed and self.compiled:
                     c = self._incremental_compiled(d, self.current[1][bi][r], picks, changed)  # type: ignore[index]
                 elif changed:
                     c = self._incremental(d, self.current[1][bi][r], picks, changed)  # type: ignore[index]
