@@ -246,3 +246,38 @@ def test_compiled_and_torch_scorers_run_the_same_search(case):
         assert abs(x["objective"] - y["objective"]) <= 1e-4 * max(1.0, abs(y["objective"]))
     assert sa.rows_recomputed == sb.rows_recomputed and sa.memo_hits == sb.memo_hits
     assert sa.rows_recomputed > 0
+
+
+@pytest.mark.parametrize("backend", ["numba", "torch"])
+def test_scorer_beyond_127_agents(backend):
+    """Picks are stored small (int8) only up to 127 agents: a 140-agent bucket scores exactly as the full
+    forward pass (before, indices above 127 wrapped around)."""
+    from neurosym_cli.synth import kernels
+
+    if backend == "numba" and not kernels.AVAILABLE:
+        pytest.skip("numba not installed")
+    env = make_env(TaskConfig(name="random-cross", horizon=4))
+    torch.manual_seed(0)
+    pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).eval()
+    g = torch.Generator().manual_seed(0)
+    s, n = 2, 140
+    pos = torch.rand(s, n, 2, generator=g) * 30
+    agent = torch.randn(s, n, 2, generator=g)
+    data = [DataBucket(agent, pos[:, :, None, :] - pos[:, None, :, :], torch.randn(s, n, 2, generator=g))]
+    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 3, 1, torch.Generator().manual_seed(1),
+                      CPU, backend=backend)
+    far = ArgMaxRule(Linear((("d", 1.0),)), TrueCond())  # the farthest agent: often an index above 127
+    picks = sc.picks_of(far)[0].long()
+    assert int(picks.max()) > 127
+    assert torch.equal(picks.flatten(), rule_picks(far, sc.data[0].feats, None).flatten())
+    space = _space(sc, 3)
+    rng = random.Random(0)
+    rules = (far,) + random_rules(space, rng)[1:]
+    sc.score(rules)
+    sc.accept()
+    for _ in range(10):
+        rules, _ = propose(rules, space, rng)
+        inc = sc.score(rules)
+        sc.accept()
+        full = sc.full_score(Program((rules,)))
+        assert abs(inc.total - full.total) <= 1e-4 * max(1.0, full.total)

@@ -55,8 +55,8 @@ def incremental_rows(new_cols, changed, table, n, codes, memo_key, memo_l1, l1, 
                      todo_rows, todo_picks, todo_valid, todo_keys):
     """Apply the changed rules' new picks to one bucket, in place on copies of the accepted state.
 
-    new_cols (C, R) int8: the new picks of the changed rules; changed (C,) int64: their positions in the table.
-    table (R, K) int8, l1 (R,) float32, deg_in/deg_out (R,) int32: updated in place (callers pass copies).
+    new_cols (C, R) int8 or int16: the new picks of the changed rules; changed (C,) int64: their positions in the table.
+    table (R, K) (as new_cols), l1 (R,) float32, deg_in/deg_out (R,) int32: updated in place (callers pass copies).
     An agent whose picked set is unchanged keeps its L1; one whose new set is in the memo (one slot per set name,
     ``key % MEMO``) takes the remembered L1; the others are listed in todo_* (rows, (M, K) picks, valid, keys)
     for the forward pass. Returns (M, memo hits)."""
@@ -164,10 +164,10 @@ def _test_value(fp, fa, n_pair, r, rj, feat, w, nterm, t):
 
 @njit(**_JIT)
 def scan_picks(fp, fa, n, op, feat, w, nterm, thr, agent_level, order, natural, out):
-    """out (R,) int8: each row's pick under one rule, -1 when its filter passes nobody.
+    """out (R,) int8 or int16: each row's pick under one rule, -1 when its filter passes nobody.
 
     op: filter shape (above); feat (2, T) int64, w (2, T) float32, nterm (2,), thr (2,) float32, agent_level (2,)
-    bool: the tests. order (R, N) int8: each row's candidates best first (ties: lower index first, as torch's max);
+    bool: the tests. order (R, N) (as out): each row's candidates best first (ties: lower index first, as torch's max);
     natural: ignore ``order`` and use 0..N-1 (a score that is the same for every candidate)."""
     n_pair = fp.shape[0]
     r_total = out.shape[0]

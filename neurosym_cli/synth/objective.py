@@ -133,6 +133,8 @@ class _Prepared:
         rows = self.s * self.n if memo else 0
         self.memo_key = torch.zeros(rows, MEMO, dtype=torch.int64, device=device)
         self.memo_l1 = torch.zeros(rows, MEMO, device=device)
+        # picks are agent indices, stored small: int8 up to 127 agents, int16 beyond
+        self.pick_dtype = torch.int8 if self.n <= 127 else torch.int16
         self.todo: tuple[Tensor, Tensor, Tensor, Tensor] | None = None  # scratch of the compiled path
         self.scan: tuple[list[str], list[str], np.ndarray, np.ndarray] | None = None
         self.orders: dict[tuple, np.ndarray] = {}
@@ -145,7 +147,7 @@ class _Prepared:
         return self.scan
 
     def order(self, key: tuple, values: Tensor | None = None) -> np.ndarray:
-        """(S N, N) int8 candidates of every agent, best first, ties by lower index (torch's max): by a pair
+        """(S N, N) candidates (pick_dtype) of every agent, best first, ties by lower index (torch's max): by a pair
         feature's value (key ("score", name, descending)) or by the given uniforms (key ("random", position, r))."""
         if key not in self.orders:
             if key[0] == "score":
@@ -156,7 +158,7 @@ class _Prepared:
                 assert values is not None
                 values = -values
             idx = torch.sort(values.reshape(-1, self.n), stable=True).indices
-            self.orders[key] = idx.to(torch.int8).numpy()
+            self.orders[key] = idx.to(self.pick_dtype).numpy()
         return self.orders[key]
 
     def set_key(self, picks: Tensor, valid: Tensor) -> Tensor:
@@ -179,8 +181,8 @@ class _Prepared:
 class _Current:
     """The accepted program of one bucket and one random sample: each rule's picks, per-row L1 and degrees."""
 
-    picks: list[Tensor]  # per rule (S N,) int8 views of cached picks
-    table: Tensor  # (S N, K) int8: the same picks, one row per agent
+    picks: list[Tensor]  # per rule (S N,) int8 (int16 beyond 127 agents) views of cached picks
+    table: Tensor  # (S N, K) the same picks, one row per agent
     l1: Tensor  # (S N,) L1 action error per agent
     deg_in: Tensor  # (S N,) int32
     deg_out: Tensor  # (S N,) int32
@@ -234,7 +236,7 @@ class CachedScorer:
         return (rule, position) if isinstance(rule, RandomRule) else (rule, -1)
 
     def picks_of(self, rule: Rule, position: int = 0) -> list[Tensor]:
-        """Per bucket (R, S N) int8 picks of one rule (R = samples for random rules, else 1); cached."""
+        """Per bucket (R, S N) picks (pick_dtype) of one rule (R = samples for random rules, else 1); cached."""
         key = self._key(rule, position)
         if key in self.rule_cache:
             self.rule_cache.move_to_end(key)
@@ -250,23 +252,23 @@ class CachedScorer:
                       for r in range(self.samples)]
             else:
                 ps = [rule_picks(rule, d.feats, None)]
-            out.append(torch.stack(ps).to(torch.int8).flatten(1))
+            out.append(torch.stack(ps).to(d.pick_dtype).flatten(1))
         self.rule_cache[key] = out
         if len(self.rule_cache) > self.cache_size:
             self.rule_cache.popitem(last=False)
         return out
 
     def _compiled_picks(self, bi: int, rule: Rule, position: int) -> Tensor | None:
-        """(R, S N) int8 picks of one rule by kernels.scan_picks, or None where the kernel does not cover it."""
+        """(R, S N) picks (pick_dtype) of one rule by kernels.scan_picks, or None where the kernel does not cover it."""
         d = self.data[bi]
         pair, agent, fp, fa = d.scan_inputs()
         spec = kernels.rule_spec(rule, pair, agent)
         if spec is None:
             return None
-        out = torch.empty(self.samples if isinstance(rule, RandomRule) else 1, d.s * d.n, dtype=torch.int8)
+        out = torch.empty(self.samples if isinstance(rule, RandomRule) else 1, d.s * d.n, dtype=d.pick_dtype)
         for r in range(out.shape[0]):
             if spec.order is None:
-                order = np.zeros((1, 1), np.int8)
+                order = np.zeros((1, 1), out.numpy().dtype)  # unused (index order)
             elif spec.order[0] == "random":
                 order = d.order(("random", position, r), self._uniforms(bi, position, r))
             else:
@@ -327,7 +329,7 @@ class CachedScorer:
             l1 = self._l1_later(d, x)
         deg_in, deg_out = degree_counts(p.view(d.s, d.n, -1), valid.view(d.s, d.n, -1), d.n)
         deg = degree_from_counts(deg_in, deg_out, self.objective, self.cap)
-        return _Current(picks, p.to(torch.int8), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
+        return _Current(picks, p.to(d.pick_dtype), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
                         float(deg.sum()), x)
 
     def _incremental_compiled(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
@@ -341,7 +343,7 @@ class CachedScorer:
             d.todo = (torch.empty(r_total, dtype=torch.int64), torch.empty(r_total, k_rules, dtype=torch.int64),
                       torch.empty(r_total, k_rules, dtype=torch.bool), torch.empty(r_total, dtype=torch.int64))
         rows, new, valid, keys = d.todo
-        new_cols = torch.stack([picks[k] for k in changed])  # (C, R) int8
+        new_cols = torch.stack([picks[k] for k in changed])  # (C, R)
         m, hits = kernels.incremental_rows(  # the memo is empty (no slots) before the last round
             new_cols.numpy(), np.asarray(changed, dtype=np.int64), table.numpy(), d.n, d.codes.numpy(),
             d.memo_key.numpy(), d.memo_l1.numpy(), l1.numpy(), deg_in.numpy(), deg_out.numpy(),
