@@ -28,6 +28,18 @@ def _setup(task=None, rounds=1, rollouts=6):
     return env, pol, data
 
 
+def _walk_matches_full_forward(sc, space, rng, rules, steps=10):
+    """Accept `steps` proposals in a row; each incremental score equals the full forward pass."""
+    sc.score(rules)
+    sc.accept()
+    for _ in range(steps):
+        rules, _ = propose(rules, space, rng)
+        inc = sc.score(rules)
+        sc.accept()
+        full = sc.full_score(Program((rules,)))
+        assert abs(inc.total - full.total) <= 1e-4 * max(1.0, full.total)
+
+
 def _space(scorer, k, det=False):
     return SearchSpace(feature_quantiles(scorer, torch.Generator().manual_seed(0)), k, 2, det)
 
@@ -86,15 +98,7 @@ def test_incremental_scoring_two_rounds():
                           CPU)
         space = _space(sc, 2)
         rng = random.Random(r)
-        rules = random_rules(space, rng)
-        sc.score(rules)
-        sc.accept()
-        for _ in range(10):
-            rules, _ = propose(rules, space, rng)
-            inc = sc.score(rules)
-            sc.accept()
-            full = sc.full_score(Program((rules,)))
-            assert abs(inc.total - full.total) <= 1e-4 * max(1.0, full.total)
+        _walk_matches_full_forward(sc, space, rng, random_rules(space, rng))
 
 
 def test_mcmc_recovers_a_planted_program():
@@ -272,12 +276,4 @@ def test_scorer_beyond_127_agents(backend):
     assert torch.equal(picks.flatten(), rule_picks(far, sc.data[0].feats, None).flatten())
     space = _space(sc, 3)
     rng = random.Random(0)
-    rules = (far,) + random_rules(space, rng)[1:]
-    sc.score(rules)
-    sc.accept()
-    for _ in range(10):
-        rules, _ = propose(rules, space, rng)
-        inc = sc.score(rules)
-        sc.accept()
-        full = sc.full_score(Program((rules,)))
-        assert abs(inc.total - full.total) <= 1e-4 * max(1.0, full.total)
+    _walk_matches_full_forward(sc, space, rng, (far,) + random_rules(space, rng)[1:])
