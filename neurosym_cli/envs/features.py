@@ -65,7 +65,7 @@ class PairFeatures:
         import numpy as np
 
         b, n = self.batch, self.n_agents
-        pair = [nm for nm in self.names if self[nm].shape[-1] != 1 or n == 1]
+        pair = [nm for nm in self.names if nm in _vec_names("") or "_" in nm]  # of o_ij: (B, N, N)
         agent = [nm for nm in self.names if nm not in pair]
         fp = torch.stack([self[nm].expand(b, n, n).reshape(-1) for nm in pair]).float().contiguous()
         fa = (torch.stack([self[nm].reshape(-1) for nm in agent]).float().contiguous() if agent

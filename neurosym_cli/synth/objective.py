@@ -35,6 +35,7 @@ from ..envs.features import PairFeatures
 from ..policy.transformer import NEG, CommTransformer
 from . import kernels
 from .dataset import DataBucket
+from .prepared import Prepared
 
 
 @dataclass(frozen=True)
@@ -76,107 +77,6 @@ def degree_term(picks: Tensor, valid: Tensor, n: int, objective: str, cap: int) 
     return degree_from_counts(*degree_counts(picks, valid, n), objective, cap)
 
 
-MEMO = 4  # memo slots per agent
-
-
-class _Prepared:
-    """Program-independent tensors of one bucket."""
-
-    def __init__(self, policy: CommTransformer, kind: str, b: DataBucket, round_idx: int, version: str,
-                 device: torch.device, memo: bool):
-        self.s, self.n = b.states, b.n_agents
-        self.agent, self.rel, self.target = b.agent.to(device), b.rel.to(device), b.target.to(device)
-        self.feats = PairFeatures(kind, self.agent, self.rel, version)
-        h = torch.relu(policy.embed(self.agent))  # (S, N, D)
-        # per round (S, N, N); in chunks of ~1M pairs, since the keys are (S, N, N, D) before the reduction
-        ch = max(1, 1_000_000 // (self.n * self.n))
-        self.logits = [torch.cat([layer.logits(h[c:c + ch], self.rel[c:c + ch]) for c in range(0, self.s, ch)])
-                       for layer in policy.rounds]
-        x = h
-        others = ~torch.eye(self.n, dtype=torch.bool, device=device).expand(self.s, -1, -1)
-        for q in range(round_idx):  # rounds before the synthesized one use full soft attention
-            x, _ = policy.rounds[q].aggregate(x, self.logits[q], others, self.rel)
-        layer = policy.rounds[round_idx]
-        # W_o is linear, so W_o sum_j a_ij m_j->i + b_o = sum_j a_ij (W_o m_j->i) + b_o (the a_ij sum to 1 or 0):
-        # cache x_i + b_o and the projected messages W_o m_j->i instead of projecting every row per proposal
-        self.base = (x + layer.out.bias).reshape(-1, x.shape[-1])  # (S N, D)
-        self.values = layer.value(x)  # (S, N, D)
-        self.others = others
-        # the projected message of every pair, when it fits (<= 32M pairs, ~2 GB): scoring then gathers K
-        # messages per agent instead of recomputing them
-        self.messages: Tensor | None = None
-        if self.s * self.n * self.n <= 32_000_000:
-            self.messages = torch.cat([
-                F.linear(self.values[c:c + ch, None, :, :]
-                         + torch.relu(layer.msg_edge(self.rel[c:c + ch].transpose(1, 2))),  # [i, j] from o_ji
-                         layer.out.weight)
-                for c in range(0, self.s, ch)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
-        self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
-        # later rounds attend softly over everybody with logits from the original state, so their weights A and
-        # the message part C_i = sum_j a_ij ReLU(W_m o_ji) do not depend on the program: a later round is then
-        # one (N, N) x (N, D) product per state plus its post-attention block (appendix A, round r < last)
-        self.later: list[tuple[Tensor, Tensor]] = []
-        for q in range(round_idx + 1, policy.n_rounds):
-            lay = policy.rounds[q]
-            a = torch.softmax(self.logits[q].masked_fill(~others, NEG), -1) * others  # (S, N, N)
-            c = torch.cat([(a[c:c + ch, :, :, None] * torch.relu(lay.msg_edge(self.rel[c:c + ch].transpose(1, 2))))
-                           .sum(2) for c in range(0, self.s, ch)])  # (S, N, D)
-            self.later.append((a, c))
-        self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
-        self.uniforms: dict[tuple[int, int], Tensor] = {}
-        # memo of each agent's L1 error per set of picked agents: a proposal often gives an agent a set it had
-        # under an earlier program (a rule moved back, another rule changed). A set is named by the sum of random
-        # 40-bit codes of its members (+1, so that no set is 0 = empty slot); MEMO slots per agent, direct-mapped.
-        # Only the last round has per-agent errors to remember (an earlier round's program changes every agent).
-        self.codes = torch.randint(1, 2**40, (self.n,), generator=torch.Generator().manual_seed(self.n),
-                                   dtype=torch.int64).to(device)
-        rows = self.s * self.n if memo else 0
-        self.memo_key = torch.zeros(rows, MEMO, dtype=torch.int64, device=device)
-        self.memo_l1 = torch.zeros(rows, MEMO, device=device)
-        # picks are agent indices, stored small: int8 up to 127 agents, int16 beyond
-        self.pick_dtype = torch.int8 if self.n <= 127 else torch.int16
-        self.todo: tuple[Tensor, Tensor, Tensor, Tensor] | None = None  # scratch of the compiled path
-        self.scan: tuple[list[str], list[str], np.ndarray, np.ndarray] | None = None
-        self.orders: dict[tuple, np.ndarray] = {}
-
-    def scan_inputs(self) -> tuple[list[str], list[str], np.ndarray, np.ndarray]:
-        """(pair names, agent names, pair features (P, S N N), agent features (A, S N)) for kernels.scan_picks;
-        the stacked tensors replace the feature view's own copies, so memory is not doubled."""
-        if self.scan is None:
-            self.scan = self.feats.stacked()
-        return self.scan
-
-    def order(self, key: tuple, values: Tensor | None = None) -> np.ndarray:
-        """(S N, N) candidates (pick_dtype) of every agent, best first, ties by lower index (torch's max): by a pair
-        feature's value (key ("score", name, descending)) or by the given uniforms (key ("random", position, r))."""
-        if key not in self.orders:
-            if key[0] == "score":
-                pair, _, fp, _ = self.scan_inputs()
-                v = torch.from_numpy(fp[pair.index(key[1])])
-                values = -v if key[2] else v
-            else:
-                assert values is not None
-                values = -values
-            idx = torch.sort(values.reshape(-1, self.n), stable=True).indices
-            self.orders[key] = idx.to(self.pick_dtype).numpy()
-        return self.orders[key]
-
-    def set_key(self, picks: Tensor, valid: Tensor) -> Tensor:
-        """(M, K) picks and valid -> (M,) int64 name of each row's set of picked agents."""
-        return 1 + torch.where(valid, self.codes[picks.clamp(min=0)], 0).sum(-1)
-
-    def recall(self, rows: Tensor, key: Tensor) -> tuple[Tensor, Tensor]:
-        """(hit (M,) bool, L1 (M,) where hit) for rows (M,) with set names key (M,)."""
-        match = self.memo_key.index_select(0, rows) == key[:, None]  # (M, MEMO)
-        vals = (self.memo_l1.index_select(0, rows) * match).sum(-1)
-        return match.any(-1), vals
-
-    def remember(self, rows: Tensor, key: Tensor, l1: Tensor) -> None:
-        slot = rows * MEMO + key % MEMO
-        self.memo_key.view(-1)[slot] = key
-        self.memo_l1.view(-1)[slot] = l1
-
-
 @dataclass
 class _Current:
     """The accepted program of one bucket and one random sample: each rule's picks, per-row L1 and degrees."""
@@ -211,7 +111,7 @@ class CachedScorer:
         self.uniform_seed = int(torch.randint(0, 2**62, (1,), generator=gen))
         self.last_round = round_idx == policy.n_rounds - 1
         with torch.no_grad():
-            self.data = [_Prepared(policy, kind, b, round_idx, version, device, memo=self.last_round)
+            self.data = [Prepared(policy, kind, b, round_idx, version, device, memo=self.last_round)
                          for b in buckets]
         self.total_states = sum(d.s for d in self.data)
         self.rule_cache: OrderedDict[tuple, list[Tensor]] = OrderedDict()
@@ -241,11 +141,13 @@ class CachedScorer:
         if key in self.rule_cache:
             self.rule_cache.move_to_end(key)
             return self.rule_cache[key]
+        spec = None  # the rule compiled once for kernels.scan_picks (feature names are the same in every bucket)
+        if self.compiled:
+            spec = kernels.rule_spec(rule, *self.data[0].scan_inputs()[:2])
         out = []
         for bi, d in enumerate(self.data):
-            compiled = self._compiled_picks(bi, rule, position) if self.compiled else None
-            if compiled is not None:
-                out.append(compiled)
+            if spec is not None:
+                out.append(self._compiled_picks(bi, spec, position))
                 continue
             if isinstance(rule, RandomRule):
                 ps = [rule_picks(rule, d.feats, _Uniforms(self._uniforms(bi, position, r)))
@@ -258,18 +160,16 @@ class CachedScorer:
             self.rule_cache.popitem(last=False)
         return out
 
-    def _compiled_picks(self, bi: int, rule: Rule, position: int) -> Tensor | None:
-        """(R, S N) picks (pick_dtype) of one rule by kernels.scan_picks, or None where the kernel does not cover it."""
+    def _compiled_picks(self, bi: int, spec: kernels.RuleSpec, position: int) -> Tensor:
+        """(R, S N) picks (pick_dtype) of one compiled rule in bucket bi, by kernels.scan_picks."""
         d = self.data[bi]
-        pair, agent, fp, fa = d.scan_inputs()
-        spec = kernels.rule_spec(rule, pair, agent)
-        if spec is None:
-            return None
-        out = torch.empty(self.samples if isinstance(rule, RandomRule) else 1, d.s * d.n, dtype=d.pick_dtype)
+        _, _, fp, fa = d.scan_inputs()
+        random_rule = spec.order is not None and spec.order[0] == "random"
+        out = torch.empty(self.samples if random_rule else 1, d.s * d.n, dtype=d.pick_dtype)
         for r in range(out.shape[0]):
             if spec.order is None:
                 order = np.zeros((1, 1), out.numpy().dtype)  # unused (index order)
-            elif spec.order[0] == "random":
+            elif random_rule:
                 order = d.order(("random", position, r), self._uniforms(bi, position, r))
             else:
                 order = d.order(spec.order)
@@ -278,7 +178,7 @@ class CachedScorer:
         return out
 
     # ---------------------------------------------------------------------------------------- forward
-    def _round_out(self, d: _Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
+    def _round_out(self, d: Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """Output of the synthesized round for flat rows (M,) of (S N) with their picks and valid (M, K) -> (M, D)."""
         layer = self.policy.rounds[self.round]
         n = d.n
@@ -301,13 +201,13 @@ class CachedScorer:
         z = layer.norm1(d.base.index_select(0, rows) + agg)
         return layer.norm2(z + layer.ffn2(torch.relu(layer.ffn1(z))))
 
-    def _l1_rows(self, d: _Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
+    def _l1_rows(self, d: Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """(M,) L1 action error of the given rows (only valid for the last round)."""
         y = self._round_out(d, rows, picks, valid)
         a = self.env.effective_action(self.policy.head(y))
         return (a - d.target_flat.index_select(0, rows)).abs().sum(-1)
 
-    def _l1_later(self, d: _Prepared, x: Tensor) -> Tensor:
+    def _l1_later(self, d: Prepared, x: Tensor) -> Tensor:
         """(S N, D) output of the synthesized round -> (S N,) L1 error after the later (soft) rounds."""
         y = x.view(d.s, d.n, -1)
         for (a, c), layer in zip(d.later, self.policy.rounds[self.round + 1:]):
@@ -316,7 +216,7 @@ class CachedScorer:
         return (out - d.target).abs().sum(-1).flatten()
 
     # ------------------------------------------------------------------------------------------ score
-    def _full(self, d: _Prepared, picks: list[Tensor]) -> _Current:
+    def _full(self, d: Prepared, picks: list[Tensor]) -> _Current:
         p = torch.stack(picks, -1).long()  # (S N, K)
         valid = dedup_valid(p)
         rows = torch.arange(d.s * d.n, device=self.device)
@@ -332,7 +232,7 @@ class CachedScorer:
         return _Current(picks, p.to(d.pick_dtype), l1, deg_in.flatten(), deg_out.flatten(), float(l1.sum()),
                         float(deg.sum()), x)
 
-    def _incremental_compiled(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
+    def _incremental_compiled(self, d: Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
         """``_incremental`` with the bookkeeping in one compiled pass over the agents (kernels.incremental_rows);
         only the forward pass of the agents whose set changed (and, before the last round, the later rounds)
         stays in torch."""
@@ -363,10 +263,10 @@ class CachedScorer:
         deg = kernels.degree_sum(deg_in.numpy(), deg_out.numpy(), d.n, self.objective == "hinge", self.cap)
         return _Current(picks, table, l1, deg_in, deg_out, float(l1.sum()), float(deg), x)
 
-    def _incremental(self, d: _Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
+    def _incremental(self, d: Prepared, cur: _Current, picks: list[Tensor], changed: list[int]) -> _Current:
         """Only the agents whose pick of a changed rule differs are recomputed (their round output, and their L1
         and degree counts). Before the last round, a changed agent is heard by everybody in the next round, so the
-        later rounds are rerun on every agent, from the cached weights of ``_Prepared.later``."""
+        later rounds are rerun on every agent, from the cached weights of ``Prepared.later``."""
         diff = picks[changed[0]] != cur.picks[changed[0]]
         for k in changed[1:]:
             diff |= picks[k] != cur.picks[k]
