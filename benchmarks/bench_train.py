@@ -18,7 +18,7 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
 from neurosym_cli.envs import Rng, make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import make_comm, CommTransformer
@@ -58,8 +58,8 @@ def train_rate(batch: int, rollouts: int, lr: float, lr_final: float, clip: floa
     torch.manual_seed(0)
     env = make_env(CROSS)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(DEVICE)
-    spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, lr=lr, lr_final=lr_final, grad_clip=clip,
-                   checkpoint_every=10**9, step_per_bucket=True)  # with one rollout per step: one bucket
+    spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, checkpoint_every=10**9,
+                   optim=OptimConfig(lr=lr, lr_final=lr_final, grad_clip=clip, step_per_bucket=True))  # with one rollout per step: one bucket
     t0 = time.perf_counter()
     fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), DEVICE, Quiet(), lambda s: None)
     if DEVICE.type == "cuda":

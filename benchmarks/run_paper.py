@@ -29,6 +29,9 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from neurosym_cli.baselines import BASELINES
+from neurosym_cli.stages.graph import plan, requires
+
 ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("random-cross", "random-grid", "unlabeled-goals")
 # estimated one-thread seconds per stage and task, from the runs of 2026-11-25 (used when no timings exist)
@@ -38,13 +41,9 @@ DEFAULTS = {
     "retrain prog-retrained": (60, 70, 30), "retrain det-prog-retrained": (60, 70, 30),
     "retrain dt-retrained": (110, 180, 60), "pipeline": (40, 30, 15),
 }
-# (stage, what it waits for) of one task; `pipeline` evaluates all ten baselines once everything exists
-STAGES = (
-    ("train tf-full", ()), ("train dist", ()), ("train no-comm", ()),
-    ("synth prog", ("train tf-full",)), ("synth det-prog", ("train tf-full",)), ("synth dt", ("train tf-full",)),
-    ("retrain prog-retrained", ("synth prog",)), ("retrain det-prog-retrained", ("synth det-prog",)),
-    ("retrain dt-retrained", ("synth dt",)),
-)
+# the stages of one task, with what each waits for: the pipeline's own stage graph (neurosym_cli/stages/graph.py)
+# over every registered baseline; its evaluations are the last `neurosym pipeline` of each task
+STAGES = [s for s in plan(list(BASELINES)) if s.verb != "eval"]
 
 
 @dataclass
@@ -81,9 +80,9 @@ def build(tasks: list[str]) -> list[Job]:
         if timing.exists():
             known = json.loads(timing.read_text())
         by_stage: dict[str, Job] = {}
-        for stage, deps in STAGES:
-            est = known.get(stage) or DEFAULTS[stage][col]
-            by_stage[stage] = Job(task, stage, [by_stage[d] for d in deps], float(est))
+        for stage in STAGES:
+            est = known.get(stage.name) or DEFAULTS[stage.name][col]
+            by_stage[stage.name] = Job(task, stage.name, [by_stage[d.name] for d in requires(stage)], float(est))
         final = Job(task, "pipeline", list(by_stage.values()), float(DEFAULTS["pipeline"][col]))
         jobs += [*by_stage.values(), final]
     for job in reversed(jobs):  # dependants come after their dependencies: one backward pass sets priorities

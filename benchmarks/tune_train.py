@@ -12,7 +12,7 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
 from neurosym_cli.envs import make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
@@ -43,9 +43,9 @@ def main() -> None:
     dev = torch.device(a.device)
     env = make_env(TASKS[a.task])
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(dev)
-    spec = FitSpec(rollouts=a.rollouts, batch=a.batch, horizon=env.horizon, lr=a.lr, lr_final=a.lr_final,
-                   grad_clip=a.clip, gamma=a.gamma, checkpoint_every=10**9,
-                   step_per_bucket=a.step_per_bucket)
+    spec = FitSpec(rollouts=a.rollouts, batch=a.batch, horizon=env.horizon, checkpoint_every=10**9,
+                   optim=OptimConfig(lr=a.lr, lr_final=a.lr_final, grad_clip=a.clip, gamma=a.gamma,
+                                     step_per_bucket=a.step_per_bucket))
     tag = f"{a.task} B={a.batch} lr={a.lr}->{a.lr_final} clip={a.clip} gamma={a.gamma} per_bucket={a.step_per_bucket}"
     t0 = time.perf_counter()
 

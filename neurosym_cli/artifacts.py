@@ -26,18 +26,24 @@ def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
     atomic_write_bytes(Path(path), buf.getvalue())
 
 
-def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
-    """Load a checkpoint safely; ``made_by`` is the command that creates it (named in the error)."""
+def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any]:
+    """Load a torch file of format ``fmt`` safely (``weights_only=True``: tensors and plain data, never arbitrary
+    pickles); ``made_by`` is the command that creates it, named in the one-line error."""
     path = Path(path)
     if not path.exists():
-        raise ArtifactError(f"no checkpoint at {path}; create it with `{made_by}`")
+        raise ArtifactError(f"no {what} at {path}; create it with `{made_by}`")
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # truncated file, foreign pickle, wrong format: all the same to the user
-        raise ArtifactError(f"corrupt checkpoint {path} ({type(e).__name__}); delete it and re-run `{made_by}`") from None
-    if not isinstance(payload, dict) or payload.get("format") != CHECKPOINT_FORMAT:
-        raise ArtifactError(f"{path} is not a neurosym policy checkpoint; re-run `{made_by}`")
+        raise ArtifactError(f"corrupt {what} {path} ({type(e).__name__}); delete it and re-run `{made_by}`") from None
+    if not isinstance(payload, dict) or payload.get("format") != fmt:
+        raise ArtifactError(f"{path} is not a {fmt} file; re-run `{made_by}`")
     return payload
+
+
+def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
+    """A policy checkpoint (weights, architecture, config, resume state)."""
+    return load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
 
 
 # ------------------------------------------------------------------------------------------- policies

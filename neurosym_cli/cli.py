@@ -8,31 +8,9 @@ from __future__ import annotations
 import os
 import sys
 
-COMMANDS = {
-    "train": "train",
-    "eval": "eval",
-    "synth": "synth",
-    "retrain": "retrain",
-    "show-program": "show_program",
-    "pipeline": "pipeline",
-    "report": "report",
-}
-AVAILABLE = set(COMMANDS)
+from neurosym_cli.commands import COMMANDS
 
-USAGE = """usage: neurosym <command> [hydra overrides] [hydra flags]
-
-Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).
-
-commands:
-  train          train the transformer oracle (or a baseline's own model) by backprop through the dynamics
-  eval           evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions
-  synth          synthesize a communication program by MCMC (paper sections 3.2, 3.4)
-  retrain        fine-tune the oracle under a synthesized program (paper section 3.5)
-  show-program   print a synthesized program in the paper's notation
-  pipeline       every stage for every baseline (train, synth, retrain, eval), then the results table
-  report         one table and plot over every training seed of a task and budget
-
-examples:
+EXAMPLES = """examples:
   neurosym pipeline task=random-grid                 # the whole method and its baselines, quick budget
   neurosym pipeline -m seed=0,1,2 budget=paper       # per-seed pipelines at the paper's budget
   neurosym report budget=paper                       # mean ± std over those seeds, with a plot
@@ -48,11 +26,21 @@ examples:
   neurosym train -m seed=0,1,2 hydra/launcher=joblib
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running
-
-tasks: random-cross, random-grid, unlabeled-goals, two-groups-cross
-baselines: tf-full, hard-attn, dist, no-comm, prog, det-prog, prog-retrained, det-prog-retrained
-budgets: paper, quick, tiny
 """
+
+
+def usage() -> str:
+    """`neurosym --help`: the commands, examples, and the choices of each config group, from their one source."""
+    from neurosym_cli.baselines import BASELINES
+
+    lines = ["usage: neurosym <command> [hydra overrides] [hydra flags]", "",
+             "Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).", "", "commands:"]
+    lines += [f"  {name:<14} {text}" for name, (_, text) in COMMANDS.items()]
+    lines += ["", EXAMPLES.rstrip(), ""]
+    lines += [f"{group}s: {', '.join(choices(group))}" for group in ("task", "budget")]
+    lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in BASELINES.values()]
+    return "\n".join(lines) + "\n"
+
 
 # flags whose next argument is their value (Hydra's argparse rejects overrides that follow a flag)
 _VALUED = {"--cfg", "-c", "--package", "-p", "--config-path", "-cp", "--config-name", "-cn", "--config-dir", "-cd",
@@ -84,22 +72,31 @@ def _conf_dir():
     return Path(spec.origin).parent if spec and spec.origin else None
 
 
+def choices(group: str) -> list[str]:
+    """The options of a config group: the registered baselines, or the YAML files of conf/<group>/."""
+    if group == "baseline":
+        from neurosym_cli.baselines import BASELINES
+
+        return list(BASELINES)
+    conf = _conf_dir()
+    return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
+
+
 def check_choices(args: list[str]) -> str | None:
     """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None.
 
     Hydra would say the same over a dozen lines; this names the valid choices and stays cheap (no Hydra import).
     """
-    conf = _conf_dir()
-    if conf is None:
-        return None
     for a in args:
         key, sep, value = a.partition("=")
         if not sep or key.startswith(("+", "~", "hydra")) or key not in ("task", "baseline", "budget"):
             continue
-        choices = sorted(p.stem for p in (conf / key).glob("*.yaml"))
+        known = choices(key)
+        if not known:
+            return None
         for v in value.split(","):  # sweeps: task=a,b
-            if v not in choices and not v.startswith(("glob(", "choice(", "range(")):
-                return f"unknown {key} {v!r}; choose one of: {', '.join(choices)}"
+            if v not in known and not v.startswith(("glob(", "choice(", "range(")):
+                return f"unknown {key} {v!r}; choose one of: {', '.join(known)}"
     return None
 
 
@@ -126,7 +123,7 @@ def main() -> None:
             return
         argv = sys.argv[1:]
     if not argv or argv[0] in ("-h", "--help", "help"):
-        sys.stdout.write(USAGE)
+        sys.stdout.write(usage())
         return
     if argv[0] in ("--version", "-V"):
         from neurosym_cli import __version__
@@ -139,9 +136,6 @@ def main() -> None:
     if cmd not in COMMANDS:
         print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
         raise SystemExit(2)
-    if cmd not in AVAILABLE:
-        print(f"neurosym: error: `neurosym {cmd}` is not available yet in this version", file=sys.stderr)
-        raise SystemExit(2)
     bad = check_choices(rest)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
@@ -149,7 +143,7 @@ def main() -> None:
     sys.argv = [f"neurosym {cmd}", *hoist_flags(rest)]
     from neurosym_cli.commands import apps
 
-    apps.APPS[COMMANDS[cmd]]()
+    apps.APPS[COMMANDS[cmd][0]]()
 
 
 if __name__ == "__main__":

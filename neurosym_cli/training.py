@@ -14,6 +14,7 @@ from typing import Callable, Protocol
 
 import torch
 
+from .config import BudgetConfig, OptimConfig
 from .envs.base import MultiAgentEnv, Rng, split_buckets
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer
@@ -22,26 +23,26 @@ from .rollout import rollout
 
 @dataclass
 class FitSpec:
+    """One training run: how many rollouts, how batched, and the optimiser (defaults live in ``OptimConfig``)."""
+
     rollouts: int  # total training rollouts
     batch: int  # rollouts per optimizer step
     horizon: int  # T
-    lr: float = 1e-2
-    lr_final: float = 2e-4
-    grad_clip: float = 1.0
-    gamma: float = 1.0
-    detach_state: bool = False
-    checkpoint_every: int = 10
-    step_per_bucket: bool = True  # one Adam step per agent-count bucket instead of one per batch
-    min_steps_per_batch: int = 4  # with step_per_bucket: split buckets so a batch gives at least this many steps
+    optim: OptimConfig = field(default_factory=OptimConfig)
+    lr: float | None = None  # starting learning rate; None: optim.lr (retraining starts at optim.retrain_lr)
+    detach_state: bool = False  # cut BPTT between steps (the task's choice)
+    checkpoint_every: int = BudgetConfig.checkpoint_every  # optimizer steps between save() calls
 
     @property
     def steps(self) -> int:
         return math.ceil(self.rollouts / self.batch)
 
     def lr_at(self, step: int) -> float:
-        """Cosine decay from lr to lr_final over the budget."""
+        """Cosine decay from the starting rate to optim.lr_final (never above the start) over the budget."""
+        start = self.optim.lr if self.lr is None else self.lr
+        end = min(self.optim.lr_final, start)
         frac = step / max(self.steps - 1, 1)
-        return self.lr_final + 0.5 * (self.lr - self.lr_final) * (1 + math.cos(math.pi * frac))
+        return end + 0.5 * (start - end) * (1 + math.cos(math.pi * frac))
 
 
 @dataclass
@@ -72,7 +73,7 @@ def fit(
 ) -> FitState:
     """Train ``policy`` in place under ``comm``; ``save`` is called every ``checkpoint_every`` steps and at the end."""
     state = state or FitState()
-    opt = torch.optim.Adam(policy.parameters(), lr=spec.lr)
+    opt = torch.optim.Adam(policy.parameters(), lr=spec.lr_at(0))
     if state.optimizer is not None:
         opt.load_state_dict(state.optimizer)
     if state.gen_state is not None:
@@ -80,7 +81,7 @@ def fit(
     if state.torch_rng is not None:
         torch.set_rng_state(state.torch_rng)
     policy.train()
-    discount = spec.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
+    discount = spec.optim.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
     rng = Rng(gen, device)
     while state.step < spec.steps:
         t0 = time.perf_counter()
@@ -92,21 +93,21 @@ def fit(
         # with step_per_bucket each bucket also gets its own CLIP -> STEP (more updates for the same rollouts)
         total_cost, n_eps, grad_norm = 0.0, 0, 0.0
         buckets = env.reset(batch, gen)
-        if spec.step_per_bucket and spec.min_steps_per_batch > 1:
-            buckets = split_buckets(buckets, spec.min_steps_per_batch)
+        if spec.optim.step_per_bucket and spec.optim.min_steps_per_batch > 1:
+            buckets = split_buckets(buckets, spec.optim.min_steps_per_batch)
         for bucket in buckets:
             traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
-            denom = bucket.batch if spec.step_per_bucket else batch
+            denom = bucket.batch if spec.optim.step_per_bucket else batch
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())
             n_eps += bucket.batch
-            if spec.step_per_bucket:
-                grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
+            if spec.optim.step_per_bucket:
+                grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.optim.grad_clip))
                 opt.step()
                 opt.zero_grad(set_to_none=True)
-        if not spec.step_per_bucket:  # CLIP -> STEP once for the whole batch
-            grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.grad_clip))
+        if not spec.optim.step_per_bucket:  # CLIP -> STEP once for the whole batch
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.optim.grad_clip))
             opt.step()
         state.step += 1
         # LOG

@@ -7,11 +7,12 @@ from hydra import compose, initialize_config_module
 from omegaconf import OmegaConf
 
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
+from neurosym_cli.baselines import BASELINES
 from neurosym_cli.config import ConfigError, RunConfig
 from neurosym_cli.envs import ENVS
 
 CONF = Path(__file__).resolve().parents[1] / "conf"
-GROUPS = {g: sorted(p.stem for p in (CONF / g).glob("*.yaml")) for g in ("task", "baseline", "budget")}
+GROUPS = {g: sorted(p.stem for p in (CONF / g).glob("*.yaml")) for g in ("task", "budget")} | {"baseline": list(BASELINES)}
 COMMANDS = ["train", "eval"]
 
 
@@ -71,3 +72,12 @@ def test_hinge_programs_do_not_share_the_paper_objectives_place():
     assert paths.program_tag(paper) == "k2-lam0.5-v1" and paths.program_tag(hinge) == "k2-lam0.5-v1-hinge"
     assert paths.synth_dir(paper) != paths.synth_dir(hinge)
     assert "synth.objective=hinge" in paths.synth_command(hinge)
+
+
+def test_baseline_group_is_the_registry():
+    """conf/ holds no baseline files: the group's options are the registry's entries, with their fields."""
+    assert not (CONF / "baseline").exists()
+    for name, b in BASELINES.items():
+        typed = OmegaConf.to_object(_compose("eval", [f"baseline={name}"]))
+        assert typed.baseline == b
+    assert OmegaConf.to_object(_compose("pipeline")).baselines == list(BASELINES)

@@ -4,7 +4,7 @@ import copy
 
 import torch
 
-from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
 from neurosym_cli.envs import make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
@@ -28,7 +28,7 @@ def test_loss_falls_on_a_small_case():
     pol = _policy(env)
     comm = make_comm("full", 2)
     before = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
-    spec = FitSpec(rollouts=16 * 25, batch=16, horizon=30, lr=1e-2, lr_final=1e-3)
+    spec = FitSpec(rollouts=16 * 25, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3))
     state = fit(pol, env, comm, spec, torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
     after = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
     assert state.step == 25
@@ -70,7 +70,7 @@ def test_step_per_bucket_takes_one_adam_step_per_bucket():
     env = make_env(TaskConfig(name="c", horizon=5))
     pol = _policy(env)
     gen = torch.Generator().manual_seed(0)
-    spec = FitSpec(rollouts=24, batch=24, horizon=5, step_per_bucket=True)
+    spec = FitSpec(rollouts=24, batch=24, horizon=5, optim=OptimConfig(step_per_bucket=True))
     n_buckets = len(env.reset(24, torch.Generator().manual_seed(0)))
     st = fit(pol, env, make_comm("full", 2), spec, gen, torch.device("cpu"), Quiet(), lambda s: None)
     adam_steps = int(next(iter(st.optimizer["state"].values()))["step"])
@@ -86,11 +86,11 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
     env = make_env(SMALL)
     pol = _policy(env)
     full = make_comm("full", 2)
-    fit(pol, env, full, FitSpec(rollouts=16 * 20, batch=16, horizon=30, lr=1e-2, lr_final=1e-3),
+    fit(pol, env, full, FitSpec(rollouts=16 * 20, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3)),
         torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
     prog = ProgramComm(parse("random(filter(d >= 3.0, l))\n"), "formation")
     before = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
-    fit(pol, env, prog, FitSpec(rollouts=16 * 15, batch=16, horizon=30, lr=3e-3, lr_final=1e-3),
+    fit(pol, env, prog, FitSpec(rollouts=16 * 15, batch=16, horizon=30, optim=OptimConfig(lr=3e-3, lr_final=1e-3)),
         torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
     after = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
     assert after < before, (before, after)
@@ -108,7 +108,7 @@ def test_min_steps_per_batch_splits_single_n_batches():
     assert torch.equal(torch.cat([b.pos for b in parts]), buckets[0].pos)
     for k, expect in ((1, 3), (4, 12)):
         pol = _policy(env)
-        spec = FitSpec(rollouts=24, batch=8, horizon=5, min_steps_per_batch=k)
+        spec = FitSpec(rollouts=24, batch=8, horizon=5, optim=OptimConfig(min_steps_per_batch=k))
         state = fit(pol, env, make_comm("full", 2), spec, torch.Generator().manual_seed(0), torch.device("cpu"),
                     Quiet(), lambda s: None)
         adam_steps = next(iter(state.optimizer["state"].values()))["step"]

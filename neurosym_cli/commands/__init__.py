@@ -1,1 +1,13 @@
-"""One module per verb; the only layer that sees Hydra's DictConfig."""
+"""One module per verb, each a thin edge: typed config in, one library call (``stages/``), output. This package is
+the only layer that sees Hydra; importing it imports nothing heavy."""
+
+COMMANDS: dict[str, tuple[str, str]] = {
+    "train": ("train", "train the transformer oracle (or a baseline's own model) by backprop through the dynamics"),
+    "eval": ("eval", "evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions"),
+    "synth": ("synth", "synthesize a communication program by MCMC (paper sections 3.2, 3.4), or a tree (dt)"),
+    "retrain": ("retrain", "fine-tune the oracle under a synthesized program or tree (paper section 3.5)"),
+    "show-program": ("show_program", "print a synthesized program in the paper's notation, with its reading"),
+    "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
+    "report": ("report", "one table and plot over every training seed of a task and budget"),
+}
+"""command-line name -> (module and primary config name, one-line help)"""

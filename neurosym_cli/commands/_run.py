@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from typing import Any, Callable
 
 from hydra.core.hydra_config import HydraConfig
@@ -12,18 +11,7 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from ..config import RunConfig, UserError
-
-
-@dataclass
-class Context:
-    """What a command gets besides its typed config."""
-
-    raw: DictConfig  # the composed config, for saving next to artifacts
-    multirun: bool
-    hydra_dir: str  # Hydra's output directory of this job (logs, .hydra/)
-
-    def config_dict(self) -> dict[str, Any]:
-        return OmegaConf.to_container(self.raw, resolve=True)  # type: ignore[return-value]
+from ..stages import RunInfo
 
 
 def _error(name: str, msg: str, code: int = 1) -> None:
@@ -50,7 +38,8 @@ def _plain_logs_off_terminal() -> None:
             root.addHandler(plain)
 
 
-def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, Context], Any]) -> Any:
+def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
+    """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback."""
     try:
         typed: RunConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
     except UserError as e:
@@ -59,13 +48,14 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, Context], A
         _error(name, str(e).splitlines()[0])
     _plain_logs_off_terminal()
     hc = HydraConfig.get()
-    ctx = Context(cfg, hc.mode == RunMode.MULTIRUN, hc.runtime.output_dir)
+    info = RunInfo(OmegaConf.to_container(cfg, resolve=True), hc.mode == RunMode.MULTIRUN,  # type: ignore[arg-type]
+                   hc.runtime.output_dir)
     if typed.threads:
         import torch  # only here: show-program must not pay for importing torch
 
         torch.set_num_threads(typed.threads)
     try:
-        return fn(typed, ctx)
+        return fn(typed, info)
     except UserError as e:
         _error(name, str(e))
     except KeyboardInterrupt:

@@ -12,9 +12,14 @@ import hydra
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig
 
+from ..baselines import BASELINES
 from ..config import RunConfig
+from . import COMMANDS
 
-ConfigStore.instance().store(name="run_schema", node=RunConfig)
+_store = ConfigStore.instance()
+_store.store(name="run_schema", node=RunConfig)
+for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
+    _store.store(group="baseline", name=_b.name, node=_b)
 
 
 def _make(name: str):
@@ -30,4 +35,4 @@ def _make(name: str):
     return app
 
 
-APPS = {n: _make(n) for n in ("train", "eval", "synth", "retrain", "show_program", "pipeline", "report")}
+APPS = {module: _make(module) for module, _ in COMMANDS.values()}

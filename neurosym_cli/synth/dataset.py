@@ -8,12 +8,18 @@ is derived from these tensors once, by the scorer.
 
 from __future__ import annotations
 
+import hashlib
+import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import torch
 from torch import Tensor
 
+from ..artifacts import load_payload, save_checkpoint
 from ..envs.base import MultiAgentEnv, Rng
+from ..utils.console import log
+from ..utils.io import ArtifactError
 from ..policy.comm import CommContext, FullComm
 from ..policy.transformer import CommTransformer
 
@@ -58,10 +64,46 @@ def collect(env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: 
     return [DataBucket(*(torch.cat([x[k] for x in items]) for k in range(3))) for _, items in sorted(by_n.items())]
 
 
+FORMAT = "neurosym-dataset/1"
+
+
 def to_payload(buckets: list[DataBucket]) -> dict:
-    return {"format": "neurosym-dataset/1",
+    return {"format": FORMAT,
             "buckets": [{"agent": b.agent, "rel": b.rel, "target": b.target} for b in buckets]}
 
 
 def from_payload(payload: dict) -> list[DataBucket]:
     return [DataBucket(b["agent"], b["rel"], b["target"]) for b in payload["buckets"]]
+
+
+def fingerprint(policy: CommTransformer) -> str:
+    """Identifies the oracle's weights, so a dataset collected from other weights is never reused."""
+    h = hashlib.sha1()
+    for k, v in sorted(policy.state_dict().items()):
+        h.update(k.encode())
+        h.update(v.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()
+
+
+def load_or_collect(path: Path, made_by: str, env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: int,
+                    gen: torch.Generator, device: torch.device) -> list[DataBucket]:
+    """The dataset D at ``path`` when it was collected from these oracle weights, else collected and saved there
+    (once per oracle, rollouts and stride: every synthesis run of a sweep reuses it)."""
+    oracle = fingerprint(policy)
+    if Path(path).exists():
+        try:
+            payload = load_payload(path, made_by, FORMAT, "dataset")
+        except ArtifactError as e:
+            log.warning("%s; collecting it again", e)
+        else:
+            if payload.get("oracle") == oracle:
+                log.info("reusing the dataset %s", path)
+                return from_payload(payload)
+            log.info("the dataset %s came from other oracle weights; collecting it again", path)
+    t0 = time.perf_counter()
+    data = collect(env, policy, rollouts, stride, gen, device)
+    save_checkpoint(path, {**to_payload(data), "oracle": oracle})
+    pairs = sum(b.states * b.n_agents ** 2 for b in data)
+    log.info("collected D: %d rollouts, %d states, %.1fM agent pairs in %.0f s -> %s", rollouts,
+             sum(b.states for b in data), pairs / 1e6, time.perf_counter() - t0, path)
+    return data

@@ -26,6 +26,19 @@ except ImportError:  # pragma: no cover - exercised only on machines without num
         return lambda f: f
 
 
+def use_compiled(backend: str, device) -> bool:
+    """Whether the scorer runs these kernels for ``synth.backend`` (auto, numba, torch) on ``device``: auto takes
+    them on a CPU with numba; numba insists on them (a one-line error where they cannot run)."""
+    from ..config import ConfigError
+
+    if backend == "numba" and not AVAILABLE:
+        raise ConfigError("synth.backend=numba needs numba (pip install numba), or use synth.backend=auto")
+    if backend == "numba" and device.type != "cpu":
+        raise ConfigError(f"synth.backend=numba runs on the CPU only; this run uses device {device} "
+                          "(use synth.backend=auto or device=cpu)")
+    return backend != "torch" and AVAILABLE and device.type == "cpu"
+
+
 _JIT = dict(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 

@@ -98,12 +98,8 @@ class CachedScorer:
                  round_idx: int, version: str, lam: float, objective: str, cap: int, samples: int,
                  gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto"):
         self.policy = policy.eval()
-        if backend not in ("auto", "numba", "torch"):
-            raise ValueError(f"backend must be auto, numba or torch, got {backend!r}")
-        if backend == "numba" and not (kernels.AVAILABLE and device.type == "cpu"):
-            raise ValueError("backend=numba needs numba installed and a CPU device")
         # compiled bookkeeping and rule scans on CPU; torch elsewhere (GPUs, no numba) and as the reference
-        self.compiled = backend != "torch" and kernels.AVAILABLE and device.type == "cpu"
+        self.compiled = kernels.use_compiled(backend, device)
         self.env, self.round, self.lam, self.objective, self.cap = env, round_idx, lam, objective, cap
         self.samples, self.device = samples, device
         # every (bucket, rule position, sample) draws its uniforms from its own seed: random rules at different

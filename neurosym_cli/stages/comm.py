@@ -1,0 +1,43 @@
+"""The communication provider of a baseline, with its synthesized artifact (program or tree) loaded and checked
+against the task."""
+
+from __future__ import annotations
+
+from .. import paths
+from ..config import ConfigError, RunConfig
+from ..dsl.ast import Program
+from ..envs.features import feature_names
+from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm
+from ..utils.io import ArtifactError, load_program, read_json
+
+
+def check_program(program: Program, cfg: RunConfig, source: str) -> None:
+    """A program runs on this task only with its number of rounds and features of this task's feature map."""
+    if program.n_rounds != cfg.task.rounds:
+        raise ConfigError(f"{source}: the program has {program.n_rounds} round(s), task {cfg.task.name} "
+                          f"{cfg.task.rounds}")
+    known = feature_names(cfg.task.kind, cfg.task.agents_per_group, cfg.features)
+    unknown = sorted(program.features() - set(known))
+    if unknown:
+        raise ConfigError(f"{source}: feature(s) {', '.join(unknown)} not in task {cfg.task.name} with "
+                          f"features={cfg.features}; it has: {', '.join(known)}")
+
+
+def baseline_comm(cfg: RunConfig) -> CommProvider:
+    """The provider of ``cfg.baseline``: a program or tree from the run directory (or ``program=``), or a rule."""
+    if cfg.baseline.comm == "program":
+        path = paths.program_file(cfg)
+        program = load_program(path, paths.synth_command(cfg))
+        check_program(program, cfg, str(path))
+        return ProgramComm(program, cfg.task.kind, cfg.features)
+    if cfg.baseline.comm == "tree":
+        from ..synth.tree import TreeModel
+
+        path = paths.tree_file(cfg)
+        if not path.exists():
+            raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
+        rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
+        if len(rounds) != cfg.task.rounds:
+            raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
+        return TreeComm(rounds, cfg.task.kind, cfg.features)
+    return make_comm(cfg.baseline.comm, cfg.rules)

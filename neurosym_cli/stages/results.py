@@ -1,0 +1,103 @@
+"""Evaluations read back: every baseline evaluated in one run directory, or aggregated over the training seeds of
+a (task, budget), in the paper's order (``baselines.BASELINES``), as tables and Figure-2-style plots."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .. import baselines
+from ..config import RunConfig
+from ..plotting import figure2
+from ..rollout import METRICS
+from ..utils.console import console, metrics_table
+from ..utils.io import ArtifactError, read_json, write_csv, write_json
+
+COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
+           ("collisions", "collisions")]
+"""(metric, column title) of every results table"""
+
+Rows = list[tuple[str, dict]]
+"""(label, summary) per evaluated baseline; a summary maps each metric to its mean, std, ..."""
+
+
+def _metrics(path: Path) -> dict:
+    """One metrics.json, checked for the fields the tables read."""
+    m = read_json(path)
+    if not (isinstance(m, dict) and isinstance(m.get("label"), str) and isinstance(m.get("baseline"), str)
+            and isinstance(m.get("summary"), dict) and all(isinstance(m["summary"].get(k), dict) for k in METRICS)):
+        raise ArtifactError(f"{path} is not an evaluation written by `neurosym eval`; delete it and evaluate again")
+    return m
+
+
+def collect(exp_dir: Path) -> Rows:
+    """Every baseline evaluated in an experiment directory, in the paper's order."""
+    found = [_metrics(f) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
+    found.sort(key=lambda m: (baselines.rank(m["baseline"]), m["label"]))
+    return [(m["label"], m["summary"]) for m in found]
+
+
+def aggregate(root: Path) -> tuple[Rows, list[str]]:
+    """(label, summary) per baseline over the seed directories under ``root`` (or of ``root`` itself): the mean
+    over training seeds of each metric and the spread across them; with one training seed, its spread over
+    evaluation seeds. Also the seed directories found."""
+    by_label: dict[str, list[dict]] = {}
+    names: dict[str, str] = {}
+    files = sorted(root.glob("seed*/eval/*/metrics.json")) or sorted(root.glob("eval/*/metrics.json"))
+    seeds = sorted({f.parents[2].name for f in files})
+    for f in files:
+        m = _metrics(f)
+        by_label.setdefault(m["label"], []).append(m["summary"])
+        names[m["label"]] = m["baseline"]
+    rows = []
+    for label, sums in by_label.items():
+        out = {}
+        for k in METRICS:
+            means = [s[k]["mean"] for s in sums]
+            n = len(means)
+            mean = sum(means) / n
+            std = (math.sqrt(sum((x - mean) ** 2 for x in means) / (n - 1)) if n > 1 else sums[0][k]["std"])
+            out[k] = {"mean": mean, "std": std, "train_seeds": n}
+        rows.append((label, out))
+    rows.sort(key=lambda r: (baselines.rank(names[r[0]]), r[0]))
+    return rows, seeds
+
+
+def title(cfg: RunConfig) -> str:
+    return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
+            f"mean ± std over {cfg.budget.eval_seeds} eval seeds")
+
+
+def write_figure(cfg: RunConfig) -> Path:
+    """Figure-2-style PNG of every baseline evaluated in this experiment directory."""
+    return figure2(collect(Path(cfg.exp_dir)), title(cfg).replace(": ", ":\n"),
+                   Path(cfg.exp_dir) / "eval" / "figure2.png")
+
+
+def print_table(cfg: RunConfig) -> None:
+    """The results table of every baseline evaluated in this experiment directory, and its plot."""
+    png = write_figure(cfg)
+    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS))
+    console.print(f"plot of every baseline evaluated here: {png}")
+
+
+def report(cfg: RunConfig) -> dict:
+    """`neurosym report`: the evaluations of every training seed of a (task, budget), or of ``report_dir``, as one
+    table; writes report.json, report.csv and report.png beside the seed directories."""
+    root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.runs_root) / cfg.task.name / cfg.budget.name
+    rows, seeds = aggregate(root)
+    if not rows:
+        raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
+                            f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
+    n = max(r[1]["cost"]["train_seeds"] for r in rows)
+    spread = "std over training seeds" if n > 1 else "std over evaluation seeds (one training seed)"
+    where = str(root) if cfg.report_dir else f"{cfg.task.name} ({cfg.budget.name} budget)"
+    head = f"{where}, {len(seeds)} training seed(s): mean ± {spread}"
+    write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
+                                      "baselines": {label: s for label, s in rows}})
+    write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
+                                                           for x in ("mean", "std")}} for label, s in rows])
+    png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
+    console.print(metrics_table(head, rows, COLUMNS))
+    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}")
+    return {"report": str(root / "report.json")}

@@ -1,0 +1,56 @@
+"""A program on screen: each rule in the paper's notation beside its plain-language reading, with the objective
+terms of its search when known. Reads text only (no torch), so `neurosym show-program` answers at once."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from rich.panel import Panel
+from rich.table import Table
+
+from .. import paths
+from ..config import RunConfig
+from ..dsl.ast import Program
+from ..dsl.printer import describe, rule_text
+from ..utils.console import console
+from ..utils.io import load_program
+
+
+def render(program: Program, rounds: list[dict] | None, lam: float | None, title: str = "program") -> None:
+    """Print each rule in the paper's notation beside its reading, and the objective terms when known."""
+    for r, rules in enumerate(program.rounds):
+        t = Table(show_header=True, header_style="bold", expand=False)
+        t.add_column("#", justify="right")
+        t.add_column("rule (paper notation)")
+        t.add_column("reading")
+        for k, rule in enumerate(rules, start=1):
+            t.add_row(str(k), rule_text(rule), describe(rule))
+        info = rounds[r] if rounds and r < len(rounds) else None
+        sub = ""
+        if isinstance(info, dict) and lam is not None:
+            try:
+                sub = (f"objective {info['objective']:.4f} = L1 action error {info['l1']:.4f} + {lam:g} x degree "
+                       f"{info['degree']:.3f}")
+            except (KeyError, TypeError, ValueError):
+                sub = ""  # a summary of another shape: the rules are still worth showing
+        name = f"{title}, round {r + 1}" if program.n_rounds > 1 else title
+        console.print(Panel(t, title=name, subtitle=sub or None, expand=False))
+
+
+def show_program(cfg: RunConfig) -> dict:
+    """The program of ``cfg`` (or ``program=PATH``) with the objective terms from its summary.json, if readable."""
+    path = paths.program_file(cfg)
+    program = load_program(path, paths.synth_command(cfg))
+    rounds, lam = None, None
+    summary = path.parent / "summary.json"
+    if summary.is_file():
+        try:
+            meta = json.loads(summary.read_text())
+            rounds, lam = meta.get("rounds"), meta.get("lam")
+        except (OSError, ValueError, AttributeError):
+            pass
+    if not isinstance(rounds, list) or not isinstance(lam, (int, float)):
+        rounds, lam = None, None
+    render(program, rounds, lam, title=str(Path(path)))
+    return {"program": str(path)}

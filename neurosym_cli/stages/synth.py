@@ -1,0 +1,124 @@
+"""Synthesize into the run directory (`neurosym synth`): the oracle dataset D (collected once per oracle and
+reused), then one MCMC search per communication round (paper sections 3.2-3.4, appendix A), or, for dt, one
+decision tree per round (appendix B). Writes program.txt (or tree.json), summary.json and trace.csv."""
+
+from __future__ import annotations
+
+from pathlib import Path
+import torch
+
+from .. import __version__, artifacts, paths
+from ..config import ConfigError, RunConfig
+from ..dsl.printer import to_text
+from ..envs import make_env
+from ..synth.dataset import DataBucket, load_or_collect
+from ..synth.objective import CachedScorer
+from ..synth.search import RoundSpec, as_program, search_round
+from ..utils.console import SearchDisplay, console, log, use_rich
+from ..utils.device import resolve_device
+from ..utils.io import save_program, write_csv, write_json
+from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
+from . import RunInfo
+from .show import render
+
+
+def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
+    """Search the program (or fit the tree) of ``cfg``, unless the run directory has it already (overwrite=true
+    searches again). Outside sweeps, a new program is shown with its readings."""
+    if cfg.baseline.comm not in ("program", "tree"):
+        raise ConfigError(f"synth makes programs (baseline=prog, det-prog) or trees (baseline=dt), "
+                          f"not {cfg.baseline.name}")
+    out = paths.synth_dir(cfg)
+    result = out / ("tree.json" if cfg.baseline.comm == "tree" else "program.txt")
+    if result.exists() and (out / "summary.json").exists() and not cfg.overwrite:
+        log.info("already synthesized: %s (overwrite=true searches again)", result)
+        return {"program": str(result)}
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+    policy = artifacts.policy_from_payload(payload).to(device).eval()
+    env = make_env(cfg.task, cfg.horizon)
+    data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
+                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
+    if cfg.baseline.comm == "tree":
+        return fit_trees(cfg, info, policy, data, out)
+    return search_program(cfg, info, policy, env, data, device, out)
+
+
+def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
+                   out: Path) -> dict:
+    spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
+                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det)
+    results, trace, rounds = [], [], []
+    rich = use_rich(cfg.progress, info.multirun)
+    tag = paths.program_tag(cfg)
+    for r in range(cfg.task.rounds):
+        # appendix A: each round's program is searched alone, the other rounds keep soft attention
+        scorer = CachedScorer(policy, env, cfg.task.kind, data, r, cfg.features, cfg.lam, cfg.synth.objective,
+                              cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
+                              backend=cfg.synth.backend)
+        label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
+        with SearchDisplay(label, spec.steps, cfg.lam, rich) as disp:
+            res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
+                               disp.update)
+        full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
+        results.append(res)
+        trace += [{"round": r + 1, **row} for row in res.trace]
+        rounds.append({"round": r + 1, "objective": res.best_score.total, "l1": res.best_score.l1,
+                       "degree": res.best_score.degree, "seconds": res.seconds,
+                       "proposals_per_second": res.proposals_per_second, "acceptance": res.acceptance(),
+                       "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
+                       "backend": "numba" if scorer.compiled else "torch",
+                       "full_forward_check": None if full is None else full.total})
+    program = as_program(results)
+    header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
+              f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
+    header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x degree "
+               f"{x['degree']:.4f}" for x in rounds]
+    save_program(out / "program.txt", to_text(program), header)
+    write_csv(out / "trace.csv", trace)
+    write_json(out / "summary.json", {
+        "command": "synth", "version": __version__, "task": cfg.task.name, "tag": tag,
+        "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features, "det": cfg.baseline.det,
+        "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(paths.dataset_file(cfg)),
+        "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
+        "config": info.config,
+    })
+    console.print(f"[green]synthesized[/] {out / 'program.txt'}")
+    if not info.multirun:
+        render(program, rounds, cfg.lam)
+    return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds)}
+
+
+def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out: Path) -> dict:
+    """dt (appendix B): per round, label every pair of D by the greedy global hard attention with in- and
+    out-degree <= K from the oracle's soft attention, then fit a tree on the pair features."""
+    from ..envs.features import PairFeatures
+    from ..synth.tree import fit_tree, greedy_hard_attention, soft_attention
+
+    policy = policy.cpu()
+    trees, rounds = [], []
+    for r in range(cfg.task.rounds):
+        xs, ys = [], []
+        for b in data:
+            labels = greedy_hard_attention(soft_attention(policy, b, r), cfg.rules)  # (S, N, N)
+            feats = PairFeatures(cfg.task.kind, b.agent, b.rel, cfg.features)
+            off = ~torch.eye(b.n_agents, dtype=torch.bool).expand(b.states, -1, -1)
+            xs.append(torch.stack([feats[f].expand(b.states, b.n_agents, b.n_agents)[off] for f in feats.names], -1))
+            ys.append(labels[off])
+            names = feats.names
+        x, y = torch.cat(xs), torch.cat(ys)
+        g = generator(cfg.seed, STREAM_SYNTH, 200 + r)
+        keep = torch.randperm(len(y), generator=g)[:300_000]  # bound the fitting time
+        tree, fit_info = fit_tree(x[keep], y[keep], names, (3, 5, 10, 20), cfg.seed)
+        trees.append(tree)
+        rounds.append({"round": r + 1, "pairs": int(len(keep)), "positive_fraction": float(y[keep].float().mean()),
+                       **fit_info, "nodes": len(tree.left)})
+        log.info("dt round %d: depth %d, validation accuracy %.3f, %d nodes", r + 1, fit_info["depth"],
+                 fit_info["validation_accuracy"][fit_info["depth"]], len(tree.left))
+    write_json(out / "tree.json", {"rounds": [t.to_dict() for t in trees]})
+    write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
+                                      "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
+                                      "config": info.config})
+    console.print(f"[green]fitted[/] {out / 'tree.json'}")
+    return {"tree": str(out / "tree.json")}

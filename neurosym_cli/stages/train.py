@@ -1,0 +1,123 @@
+"""Train a model into its run directory, resuming from its checkpoint: the oracle or a baseline's own model
+(`neurosym train`, paper section 3.1), or the oracle retrained under a program or tree (`neurosym retrain`,
+section 3.5). Both use the one training loop of ``training.fit``."""
+
+from __future__ import annotations
+
+import dataclasses
+import platform
+import time
+from typing import Callable
+
+import torch
+
+from .. import __version__, artifacts, paths
+from ..config import ConfigError, ModelConfig, OptimConfig, RunConfig, TaskConfig
+from ..envs import make_env
+from ..policy import CommTransformer, make_comm
+from ..policy.comm import CommProvider
+from ..training import FitSpec, FitState, fit
+from ..utils.console import ProgressReporter, console, log, use_rich
+from ..utils.device import resolve_device
+from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
+from . import RunInfo
+from .comm import baseline_comm
+
+# config sections that must match for a checkpoint to be resumed or extended
+_SECTIONS = {"task": TaskConfig, "model": ModelConfig, "optim": OptimConfig}
+
+
+def _defaults(section: str) -> dict:
+    """Default values of a config section (a key added after a checkpoint was saved compares as its default)."""
+    return {f.name: f.default for f in dataclasses.fields(_SECTIONS[section]) if f.default is not dataclasses.MISSING}
+
+
+def check_compatible(saved: dict, current: dict, path) -> None:
+    """A checkpoint is resumed or extended only under the same task, model and optimiser config."""
+    for key in _SECTIONS:
+        old, new, dflt = saved.get(key) or {}, current.get(key) or {}, _defaults(key)
+        if any(old.get(k, dflt.get(k)) != new.get(k, dflt.get(k)) for k in set(old) | set(new)):
+            raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "
+                              f"or runs_root=... to train elsewhere")
+
+
+def train(cfg: RunConfig, info: RunInfo) -> dict:
+    """`neurosym train`: the oracle (tf-full, also the weights of hard-attn and the program baselines) with full soft
+    attention, or a baseline with its own model (dist, no-comm) trained under its own mask."""
+    if cfg.baseline.model == "retrained":
+        raise ConfigError(f"{cfg.baseline.name} is made by `neurosym retrain`, not `neurosym train`")
+    if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
+        log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
+    env = make_env(cfg.task, cfg.horizon)
+    comm = make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules)
+    return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
+                     lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
+
+
+def retrain(cfg: RunConfig, info: RunInfo) -> dict:
+    """`neurosym retrain`: every weight of the oracle fine-tuned under the program's (or tree's) hard attention;
+    random rules draw from the training generator every step (section 3.5)."""
+    if cfg.baseline.model != "retrained":
+        raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
+                          f"not {cfg.baseline.name}")
+    comm = baseline_comm(cfg)
+    payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+    env = make_env(cfg.task, cfg.horizon)
+    return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
+                     lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr)
+
+
+def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: int,
+              init: Callable[[], CommTransformer], verb: str, lr: float | None = None) -> dict:
+    """Resume the run directory's checkpoint or start from ``init()``, fit, save.
+
+    Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json."""
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,
+                   detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every)
+    out = paths.train_dir(cfg)
+    ckpt = out / "model.pt"
+    state = None
+    if ckpt.exists() and not cfg.overwrite:
+        payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
+        check_compatible(payload["config"], info.config, ckpt)
+        policy = artifacts.policy_from_payload(payload)
+        state = FitState(**payload["fit"])
+        if state.step >= spec.steps:
+            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
+            return {"checkpoint": str(ckpt), "steps": state.step}
+        log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
+                 state.step * spec.batch)
+    else:
+        policy = init()
+    policy.to(device)
+
+    def save(st: FitState) -> None:
+        fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
+                    "gen_state": st.gen_state, "torch_rng": st.torch_rng}
+        payload = artifacts.policy_payload(policy, cfg.model, info.config, fit_dict, done=st.step >= spec.steps)
+        artifacts.save_checkpoint(ckpt, payload)
+        artifacts.write_csv(out / "history.csv", st.history)
+
+    label = f"{verb} {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
+    log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
+             spec.horizon, device, out)
+    t0 = time.perf_counter()
+    steps_before = state.step if state else 0
+    with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep:
+        state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, rep, save, state)
+    seconds = time.perf_counter() - t0
+    rollouts = (state.step - steps_before) * spec.batch
+    last = state.history[-5:]
+    final = sum(h["loss"] for h in last) / len(last)
+    artifacts.write_json(out / "manifest.json", {
+        "command": verb, "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
+        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss_last5": final,
+        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
+        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
+        "hydra_dir": info.log_dir, "config": info.config,
+    })
+    console.print(f"[green]done[/] {label}: loss {final:.3f} (mean of the last {len(last)} steps), "
+                  f"{rollouts} rollouts in {seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
+    return {"checkpoint": str(ckpt), "steps": state.step, "loss": final}
