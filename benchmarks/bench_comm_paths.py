@@ -12,14 +12,13 @@ providers that could give picks; both paths compute the same function (tests/tes
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import time
 from pathlib import Path
 
 import torch
-import yaml
 
+from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import ModelConfig, TaskConfig
 from neurosym_cli.dsl.parser import parse
 from neurosym_cli.envs import Rng, make_env
@@ -52,9 +51,7 @@ class Dense:
 
 
 def task_config(name: str) -> TaskConfig:
-    raw = yaml.safe_load((ROOT / "conf" / "task" / f"{name}.yaml").read_text())
-    fields = {f.name for f in dataclasses.fields(TaskConfig)}
-    return TaskConfig(**{k: v for k, v in raw.items() if k in fields})
+    return compose_config("train", [f"task={name}"]).task
 
 
 def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int) -> float:

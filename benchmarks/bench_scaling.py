@@ -27,7 +27,7 @@ import torch
 
 
 def measure(n: int, threads: int) -> dict:
-    from neurosym_cli.config import ModelConfig, TaskConfig
+    from neurosym_cli.config import CrossConfig, ModelConfig
     from neurosym_cli.dsl.ast import Program
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
     from neurosym_cli.envs import Rng, make_env
@@ -41,8 +41,8 @@ def measure(n: int, threads: int) -> dict:
 
     torch.set_num_threads(threads)
     cpu = torch.device("cpu")
-    task = TaskConfig(name=f"cross-{n}", layout="cross", num_groups=2, agents_per_group=n // 2, group_prob=1.0,
-                      box_half_width=1.25 * math.sqrt(n / 20), horizon=50)
+    task = CrossConfig(name=f"cross-{n}", num_groups=2, agents_per_group=n // 2, group_prob=1.0,
+                       box_half_width=1.25 * math.sqrt(n / 20), horizon=50)
     env = make_env(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())

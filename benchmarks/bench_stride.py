@@ -21,7 +21,7 @@ import torch
 from pathlib import Path
 
 from neurosym_cli.artifacts import load_checkpoint, policy_from_payload
-from neurosym_cli.config import TaskConfig
+from neurosym_cli.config import CrossConfig
 from neurosym_cli.dsl.ast import Program
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
 from neurosym_cli.envs import make_env
@@ -63,7 +63,7 @@ def main() -> None:
     torch.set_num_threads(a.threads)
     cpu = torch.device("cpu")
     pol = policy_from_payload(load_checkpoint(Path(a.oracle), "neurosym train task=random-cross budget=paper")).eval()
-    env = make_env(TaskConfig(name="random-cross"))
+    env = make_env(CrossConfig(name="random-cross"))
 
     def scorer(stride: int) -> CachedScorer:
         data = collect(env, pol, a.rollouts, stride, torch.Generator().manual_seed(0), cpu)

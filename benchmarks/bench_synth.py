@@ -18,7 +18,7 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, CrossConfig
 from neurosym_cli.dsl.ast import Program
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
 from neurosym_cli.envs import make_env
@@ -44,7 +44,7 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     dev = torch.device(a.device)
-    env = make_env(TaskConfig(name="random-cross"))
+    env = make_env(CrossConfig(name="random-cross"))
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(dev).eval()
     t0 = time.perf_counter()

@@ -18,13 +18,13 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig
 from neurosym_cli.envs import Rng, make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import make_comm, CommTransformer
 from neurosym_cli.training import FitSpec, fit
 
-CROSS = TaskConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
+CROSS = CrossConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
 
 
 class Quiet:

@@ -12,15 +12,15 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig, GridConfig
 from neurosym_cli.envs import make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
 from neurosym_cli.training import FitSpec, fit
 
 TASKS = {
-    "random-cross": TaskConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"]),
-    "random-grid": TaskConfig(name="random-grid", layout="grid", ell=14.0, test_settings=["rlu", "url", "ull", "rrd"]),
+    "random-cross": CrossConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"]),
+    "random-grid": GridConfig(name="random-grid", ell=14.0, test_settings=["rlu", "url", "ull", "rrd"]),
 }
 
 

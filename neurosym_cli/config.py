@@ -1,6 +1,6 @@
 """Typed configuration schemas (stdlib only, no torch).
 
-Hydra composes the YAML values in ``conf/``; ``commands/_hydra.py`` registers these dataclasses as the
+Hydra composes the YAML values in ``conf/``; ``commands/apps.py`` registers these dataclasses as the
 schemas of the primary configs, so a typo or a wrongly typed override fails at compose time, and
 ``OmegaConf.to_object`` hands the layers below a plain typed object whose ``__post_init__`` checks ranges.
 """
@@ -28,26 +28,17 @@ def _check(ok: bool, msg: str) -> None:
 
 @dataclass
 class TaskConfig:
-    """One task: the environment family plus its constants (decisions.md, 'Environments')."""
+    """What every task has (paper section 4; constants of docs/fidelity.md, 'Environments'). A task's YAML in
+    conf/task/ extends one family schema below; ``env`` names its environment, envs/<env>.py."""
 
     name: str = MISSING
     """task name as used on the command line (random-cross, random-grid, ...)"""
-    kind: str = "formation"
-    """formation (cross / grid / two-groups) or unlabeled"""
-    layout: str = "cross"
-    """formation layout: cross, grid (ignored by unlabeled)"""
-    num_groups: int = 4
-    """cross: number of possible groups (4 = paper random-cross, 2 = two-groups-cross)"""
+    env: str = MISSING
+    """the environment (envs/__init__.py ENVS): random-cross, two-groups-cross, random-grid, unlabeled-goals"""
+    kind: str = MISSING
+    """feature family of the programs (envs/features.py): formation (goal vector) or unlabeled (position, goals)"""
     agents_per_group: int = 10
     """agents in each group (formation) or agents and goals (unlabeled)"""
-    group_prob: float = 0.33
-    """cross: probability that each non-guaranteed group is present (paper section 4)"""
-    ell: float = 7.0
-    """world units: distance from the origin to the group box centres (paper's l)"""
-    box_half_width: float = 1.25
-    """world units: half-width of the start and goal boxes"""
-    min_separation: float = 0.5
-    """world units: minimum distance between sampled start (and goal) points"""
     horizon: int = 200
     """T: steps per episode"""
     rounds: int = 1
@@ -58,24 +49,9 @@ class TaskConfig:
     """world units per second: the speed is clipped to this norm"""
     noise_std: float = 0.05
     """world units: std of the Gaussian noise on relative observations o_ij"""
-    collision_weight: float = 5.0
-    """p_c: within-group collision penalty weight"""
     collision_dist: float = 0.1
-    """d_c, world units: within-group collision distance (ramp is zero beyond 2 d_c)"""
-    collision_inter_group_weight: float = 25.0
-    """reference code's across-group ramp weight (0 disables it; paper is silent)"""
-    collision_inter_group_dist: float = 2.0
-    """world units: across-group ramp distance"""
-    start_half_width: float = 2.0
-    """unlabeled: starts are drawn in [-w, w]^2"""
-    goal_half_width: float = 8.0
-    """unlabeled: goals are drawn in [-w, w]^2"""
-    start_separation: float = 1.0
-    """unlabeled: minimum separation between starts"""
-    goal_separation: float = 2.0
-    """unlabeled: minimum separation between goals"""
-    velocity: str = "paper"
-    """unlabeled velocity law: paper (sum_k p_k (g_k - x)) or reference (v_max * sum_k p_k unit(g_k - x))"""
+    """d_c, world units: pairs closer than this count as a collision (and the within-group ramp is zero beyond
+    2 d_c)"""
     detach_state: bool = False
     """cut gradients through the state between steps (reference does so for unlabeled)"""
     rules: int = 2
@@ -88,20 +64,87 @@ class TaskConfig:
     """fixed evaluation settings (one episode each per seed); empty = eval_episodes random episodes"""
 
     def __post_init__(self) -> None:
-        _check(self.kind in ("formation", "unlabeled"), f"task.kind must be formation or unlabeled, got {self.kind!r}")
-        _check(self.layout in ("cross", "grid"), f"task.layout must be cross or grid, got {self.layout!r}")
         _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
         _check(self.rounds in (1, 2), f"task.rounds must be 1 or 2, got {self.rounds}")
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
-        _check(0.0 <= self.group_prob <= 1.0, "task.group_prob must lie in [0, 1]")
         _check(self.noise_std >= 0.0, "task.noise_std must be non-negative")
-        _check(self.velocity in ("paper", "reference"), "task.velocity must be paper or reference")
         _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
 
 
 @dataclass
+class FormationConfig(TaskConfig):
+    """Formation flying (section 4): groups fly from start boxes to goal boxes without colliding."""
+
+    kind: str = "formation"
+    ell: float = 7.0
+    """world units: distance from the origin to the group box centres (paper's l)"""
+    box_half_width: float = 1.25
+    """world units: half-width of the start and goal boxes"""
+    min_separation: float = 0.5
+    """world units: minimum distance between sampled start (and goal) points"""
+    collision_weight: float = 5.0
+    """p_c: within-group collision penalty weight"""
+    collision_inter_group_weight: float = 25.0
+    """reference code's across-group ramp weight (0 disables it; paper is silent)"""
+    collision_inter_group_dist: float = 2.0
+    """world units: across-group ramp distance"""
+
+
+@dataclass
+class CrossConfig(FormationConfig):
+    """random-cross and two-groups-cross: the groups sit on a circle of radius l and cross to the opposite box."""
+
+    env: str = "random-cross"
+    num_groups: int = 4
+    """possible groups (4 = paper random-cross, 2 = two-groups-cross)"""
+    group_prob: float = 0.33
+    """probability that each non-guaranteed group is present (paper section 4; one group always is)"""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(self.num_groups >= 1, "task.num_groups must be positive")
+        _check(0.0 <= self.group_prob <= 1.0, "task.group_prob must lie in [0, 1]")
+
+
+@dataclass
+class GridConfig(FormationConfig):
+    """random-grid: three groups start at (-l, 0), (0, 0), (l, 0) and fly to adjacent, distinct boxes of a 3x3 grid."""
+
+    env: str = "random-grid"
+    ell: float = 14.0
+
+
+@dataclass
+class UnlabeledConfig(TaskConfig):
+    """unlabeled-goals (section 4): N agents cover N goals with no assignment given."""
+
+    env: str = "unlabeled-goals"
+    kind: str = "unlabeled"
+    horizon: int = 100
+    rounds: int = 2
+    start_half_width: float = 2.0
+    """starts are drawn in [-w, w]^2"""
+    goal_half_width: float = 8.0
+    """goals are drawn in [-w, w]^2"""
+    start_separation: float = 1.0
+    """minimum separation between starts"""
+    goal_separation: float = 2.0
+    """minimum separation between goals"""
+    velocity: str = "paper"
+    """paper (sum_k p_k (g_k - x)) or reference (v_max * sum_k p_k unit(g_k - x))"""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(self.velocity in ("paper", "reference"), "task.velocity must be paper or reference")
+
+
+TASK_SCHEMAS: dict[str, type[TaskConfig]] = {"cross": CrossConfig, "grid": GridConfig, "unlabeled": UnlabeledConfig}
+"""schema of each task family; a task YAML names its family in its defaults list (``/task_schema/cross@_here_``)"""
+
+
+@dataclass
 class ModelConfig:
-    """The transformer of paper section 3.1 (reference widths, decisions.md 'Policy')."""
+    """The transformer of paper section 3.1 (reference widths, docs/fidelity.md 'Policy')."""
 
     width: int = 16
     """d: embedding, query, key and message width"""
@@ -117,7 +160,7 @@ class ModelConfig:
 
 @dataclass
 class OptimConfig:
-    """Batched BPTT optimisation (decisions.md 'Training': chosen by what trains best)."""
+    """Batched BPTT optimisation (docs/fidelity.md 'Training': chosen by what trains best)."""
 
     lr: float = 1e-2
     """Adam learning rate at the start (cosine decay to lr_final); chosen by the sweep in docs/performance.md"""
@@ -203,7 +246,7 @@ class BaselineConfig:
 
 @dataclass
 class SynthConfig:
-    """MCMC program synthesis (paper section 3.4; decisions.md 'Synthesis')."""
+    """MCMC program synthesis (paper section 3.4; docs/fidelity.md 'Synthesis')."""
 
     stride: int = 10
     """keep every stride-th time step of the dataset rollouts: consecutive states are near-duplicates, and the

@@ -1,4 +1,4 @@
-"""The evaluation protocol (paper section 4, decisions.md 'Evaluation').
+"""The evaluation protocol (paper section 4, docs/fidelity.md, 'Evaluation').
 
 Every evaluation seed re-seeds everything: its episodes (the task's fixed test settings, or random episodes)
 and their observation noise come from generators derived from the seed alone, so all baselines face the same

@@ -24,7 +24,7 @@ class Trajectory:
     collisions: Tensor  # (T, B) unordered pairs closer than the collision distance
 
     def episode_metrics(self) -> dict[str, Tensor]:
-        """(B,) time averages: the per-episode metrics of the evaluation protocol (decisions.md)."""
+        """(B,) time averages: the per-episode metrics of the evaluation protocol (docs/fidelity.md)."""
         return {k: getattr(self, k).detach().float().mean(0) for k in METRICS}
 
 

@@ -29,7 +29,7 @@ def test_every_option_composes_and_types(cmd, group, option):
     assert isinstance(typed, RunConfig)
     assert typed.cmd == cmd
     assert getattr(typed, group).name == option
-    assert typed.task.kind in ENVS
+    assert typed.task.env in ENVS
 
 
 def test_task_defaults_follow_the_paper():

@@ -5,13 +5,12 @@ import math
 import pytest
 import torch
 
-from neurosym_cli.config import TaskConfig
-from neurosym_cli.envs import EnvState, FormationEnv, Rng, UnlabeledGoalsEnv, make_env
+from neurosym_cli.config import CrossConfig, GridConfig, UnlabeledConfig
+from neurosym_cli.envs import EnvState, RandomCrossEnv, Rng, UnlabeledGoalsEnv, make_env
 
-CROSS = TaskConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
-GRID = TaskConfig(name="random-grid", layout="grid", ell=14.0, num_groups=3)
-UNLAB = TaskConfig(name="unlabeled-goals", kind="unlabeled", horizon=100, rounds=2, collision_weight=0.0,
-                   collision_inter_group_weight=0.0)
+CROSS = CrossConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
+GRID = GridConfig(name="random-grid", ell=14.0)
+UNLAB = UnlabeledConfig(name="unlabeled-goals", horizon=100, rounds=2)
 
 
 def test_cross_reset_buckets_by_agent_count(gen):
@@ -67,8 +66,8 @@ def test_grid_goal_boxes_adjacent_and_distinct(gen):
 
 
 def test_formation_cost_matches_hand_computation():
-    cfg = TaskConfig(name="t", num_groups=2)
-    env = FormationEnv(cfg)
+    cfg = CrossConfig(name="t", num_groups=2)
+    env = RandomCrossEnv(cfg)
     pos = torch.tensor([[[0.0, 0.0], [0.05, 0.0], [3.0, 0.0]]])
     goal = torch.tensor([[[1.0, 0.0], [0.05, 2.0], [3.0, 4.0]]])
     group = torch.tensor([[0, 0, 1]])
@@ -80,12 +79,12 @@ def test_formation_cost_matches_hand_computation():
     assert got.shape == (1,)
     assert math.isclose(float(got), dist + within + across, rel_tol=1e-5)
     assert float(env.collisions(s)) == 1.0  # the pair (0, 1) is closer than d_c
-    cfg_off = TaskConfig(name="t", num_groups=2, collision_inter_group_weight=0.0)
-    assert math.isclose(float(FormationEnv(cfg_off).cost(s, torch.zeros(1, 3, 2))), dist + within, rel_tol=1e-5)
+    cfg_off = CrossConfig(name="t", num_groups=2, collision_inter_group_weight=0.0)
+    assert math.isclose(float(RandomCrossEnv(cfg_off).cost(s, torch.zeros(1, 3, 2))), dist + within, rel_tol=1e-5)
 
 
 def test_speed_is_clipped_and_step_integrates():
-    env = FormationEnv(TaskConfig(name="t"))
+    env = RandomCrossEnv(CrossConfig(name="t"))
     s = EnvState(torch.zeros(1, 2, 2), torch.ones(1, 2, 2), torch.zeros(1, 2, dtype=torch.long))
     nxt = env.step(s, torch.tensor([[[30.0, 40.0], [0.5, 0.0]]]))
     assert torch.allclose(nxt.pos[0, 0], torch.tensor([0.12, 0.16]), atol=1e-5)  # speed 50 -> 2, times dt 0.1
@@ -95,7 +94,7 @@ def test_speed_is_clipped_and_step_integrates():
 def test_observation_is_relative_and_noisy(gen):
     env = make_env(CROSS)
     s = env.setting("0", gen)
-    clean = make_env(TaskConfig(name="c", noise_std=0.0)).observe(s, Rng(gen))
+    clean = make_env(CrossConfig(name="c", noise_std=0.0)).observe(s, Rng(gen))
     assert torch.allclose(clean.rel[0, 2, 5], s.pos[0, 5] - s.pos[0, 2])  # o_ij = x_j - x_i
     assert torch.allclose(clean.agent, s.pos - s.goal)
     noisy = env.observe(s, Rng(gen))

@@ -5,7 +5,7 @@ import random
 import pytest
 import torch
 
-from neurosym_cli.config import ModelConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, CrossConfig, UnlabeledConfig
 from neurosym_cli.dsl import ArgMaxRule, Linear, Program, RandomRule, TrueCond
 from neurosym_cli.dsl.interpret import picks_to_mask, rule_picks
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
@@ -20,7 +20,7 @@ CPU = torch.device("cpu")
 
 
 def _setup(task=None, rounds=1, rollouts=6):
-    task = task or TaskConfig(name="random-cross", horizon=12)
+    task = task or CrossConfig(name="random-cross", horizon=12)
     env = make_env(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, rounds, ModelConfig()).eval()
@@ -90,8 +90,7 @@ def test_random_rules_at_different_positions_are_independent():
 
 
 def test_incremental_scoring_two_rounds():
-    task = TaskConfig(name="u", kind="unlabeled", horizon=6, rounds=2, collision_weight=0.0,
-                      collision_inter_group_weight=0.0, agents_per_group=5)
+    task = UnlabeledConfig(name="u", horizon=6, rounds=2, agents_per_group=5)
     env, pol, data = _setup(task, rounds=2, rollouts=3)
     for r in (0, 1):
         sc = CachedScorer(pol, env, "unlabeled", data, r, "v1", 0.7, "hinge", 2, 1, torch.Generator().manual_seed(1),
@@ -230,8 +229,7 @@ def test_compiled_and_torch_scorers_run_the_same_search(case):
         env, pol, data = _setup()
         kind, rnd, objective = "formation", 0, "paper"
     else:
-        task = TaskConfig(name="u", kind="unlabeled", horizon=6, rounds=2, collision_weight=0.0,
-                          collision_inter_group_weight=0.0, agents_per_group=5)
+        task = UnlabeledConfig(name="u", horizon=6, rounds=2, agents_per_group=5)
         env, pol, data = _setup(task, rounds=2, rollouts=3)
         kind, rnd, objective = "unlabeled", 0, "hinge"
     runs = []
@@ -260,7 +258,7 @@ def test_scorer_beyond_127_agents(backend):
 
     if backend == "numba" and not kernels.AVAILABLE:
         pytest.skip("numba not installed")
-    env = make_env(TaskConfig(name="random-cross", horizon=4))
+    env = make_env(CrossConfig(name="random-cross", horizon=4))
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).eval()
     g = torch.Generator().manual_seed(0)

@@ -4,13 +4,13 @@ import copy
 
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, TaskConfig
+from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig, GridConfig
 from neurosym_cli.envs import make_env
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
 from neurosym_cli.training import FitSpec, FitState, fit
 
-SMALL = TaskConfig(name="two-groups-cross", num_groups=2, horizon=30, test_settings=["0", "1", "0-1"])
+SMALL = CrossConfig(name="two-groups-cross", num_groups=2, horizon=30, test_settings=["0", "1", "0-1"])
 
 
 class Quiet:
@@ -67,7 +67,7 @@ def test_resume_reproduces_an_uninterrupted_run():
 
 
 def test_step_per_bucket_takes_one_adam_step_per_bucket():
-    env = make_env(TaskConfig(name="c", horizon=5))
+    env = make_env(CrossConfig(name="c", horizon=5))
     pol = _policy(env)
     gen = torch.Generator().manual_seed(0)
     spec = FitSpec(rollouts=24, batch=24, horizon=5, optim=OptimConfig(step_per_bucket=True))
@@ -101,7 +101,7 @@ def test_min_steps_per_batch_splits_single_n_batches():
     quarter of the episodes, and the split keeps every episode."""
     from neurosym_cli.envs.base import split_buckets
 
-    env = make_env(TaskConfig(name="random-grid", layout="grid", ell=14.0, horizon=5))
+    env = make_env(GridConfig(name="random-grid", ell=14.0, horizon=5))
     buckets = env.reset(10, torch.Generator().manual_seed(0))
     parts = split_buckets(buckets, 4)
     assert len(buckets) == 1 and len(parts) == 4 and sum(b.batch for b in parts) == 10

@@ -13,11 +13,13 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig
 
 from ..baselines import BASELINES
-from ..config import RunConfig
+from ..config import TASK_SCHEMAS, RunConfig
 from . import COMMANDS
 
 _store = ConfigStore.instance()
 _store.store(name="run_schema", node=RunConfig)
+for _family, _schema in TASK_SCHEMAS.items():  # what a conf/task/*.yaml extends
+    _store.store(group="task_schema", name=_family, node=_schema)
 for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
     _store.store(group="baseline", name=_b.name, node=_b)
 
@@ -36,3 +38,12 @@ def _make(name: str):
 
 
 APPS = {module: _make(module) for module, _ in COMMANDS.values()}
+
+
+def compose_config(cmd: str, overrides: list[str] | None = None) -> RunConfig:
+    """The typed config a command composes from conf/ and overrides, outside any command (benchmarks, notebooks)."""
+    from hydra import compose, initialize_config_module
+    from omegaconf import OmegaConf
+
+    with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
+        return OmegaConf.to_object(compose(cmd, overrides=overrides or []))  # type: ignore[return-value]

@@ -90,7 +90,7 @@ class Rng:
 
     Training draws for the whole batch from one generator (fast). Evaluation gives every episode its own
     generator, so an episode's noise and sampling do not depend on which other episodes share its bucket,
-    and a seed re-seeds everything (decisions.md 'Evaluation').
+    and a seed re-seeds everything (docs/fidelity.md, 'Evaluation').
     """
 
     def __init__(self, gens: torch.Generator | Sequence[torch.Generator], device: torch.device | str = "cpu"):

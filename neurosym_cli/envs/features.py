@@ -1,6 +1,6 @@
 """The feature map phi(s_i, o_ij) of the programs (paper section 3.2), with named features in world units.
 
-Version 1 (decisions.md): every 2-D vector of the agent's state and of its observation of j, each with its
+Version 1 (docs/fidelity.md): every 2-D vector of the agent's state and of its observation of j, each with its
 norm and angle. Formation: goal vector g_i - x_i -> gx, gy, gd, gtheta; observation o_ij -> dx, dy, d, theta.
 Unlabeled goals: position -> px, py, p, ptheta; the k-th nearest goal (initial order) -> g{k}x, g{k}y, g{k}d,
 g{k}theta. Version 2 adds the quadratic terms of the first state vector with o_ij (gx_dx, gx_dy, gy_dx, gy_dy).

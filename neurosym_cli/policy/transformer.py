@@ -41,6 +41,15 @@ provider needs the logits to decide (dense path)."""
 NEG = -1e9  # finite, so rows where nobody is heard give zeros instead of NaN gradients
 
 
+def selected_attention(logits: Tensor, keep: Tensor, dense: bool = False) -> Tensor:
+    """The paper's alpha^P_ij = alpha_ij / Z_i (section 3.3): softmax of i's logits over the agents it hears, zero
+    elsewhere; a row where nobody is heard is all zero. logits, keep: (..., M) over M candidates, all N agents
+    (dense) or the K picked ones. Dense rows keep torch's softmax kernel: the written-out one (utils/ops.py) is
+    faster on short rows but rounds differently, and every trained checkpoint was made with torch's."""
+    x = logits.masked_fill(~keep, NEG)
+    return (torch.softmax(x, -1) if dense else softmax_last(x)) * keep
+
+
 @dataclass
 class PolicyOutput:
     action: Tensor  # (B, N, A)
@@ -73,9 +82,23 @@ class CommRound(nn.Module):
         # multiply-and-sum beats a batched mat-vec here (many (N, D) x (D,) products are 2x slower on CPU)
         return (k * q.unsqueeze(2)).sum(-1)
 
+    def message(self, v_j: Tensor, o_ji: Tensor) -> Tensor:
+        """pi^M(s_j, o_ji) = W_v x_j + ReLU(W_m o_ji): v_j (..., D) the sender's value, o_ji (..., 2) its view of
+        the receiver -> (..., D)."""
+        return v_j + torch.relu(self.msg_edge(o_ji))
+
+    def attend(self, logits: Tensor, keep: Tensor, messages: Tensor) -> tuple[Tensor, Tensor]:
+        """Attention over selected agents: logits, keep (..., K) of the candidate pairs, messages (..., K, D) ->
+        the aggregate sum_k a_k m_k (..., D) and the weights a (..., K). Messages may come projected by W_o
+        (the scorer's cache): the sum is linear in them."""
+        attn = selected_attention(logits, keep)
+        return (self.drop(attn).unsqueeze(-1) * messages).sum(-2), attn
+
     def aggregate(self, x: Tensor, logits: Tensor, mask: Tensor, rel: Tensor) -> tuple[Tensor, Tensor]:
-        """x: (B, N, D) round input; returns the round output (B, N, D) and the weights (B, N, N)."""
-        attn = torch.softmax(logits.masked_fill(~mask, NEG), -1) * mask  # (B, N, N), rows sum to 1 or 0
+        """Dense path: x (B, N, D) round input, logits (B, N, N), mask (B, N, N) -> round output (B, N, D), weights
+        (B, N, N). The same sum as ``attend`` over all N agents, split by linearity into sum_j a_ij W_v x_j (one
+        batched product) plus sum_j a_ij ReLU(W_m o_ji), so no (B, N, N, D) value tensor is built."""
+        attn = selected_attention(logits, mask, dense=True)  # (B, N, N), rows sum to 1 or 0
         w = self.drop(attn)
         # the message j -> i uses the sender's view o_ji: transpose the 2-d input, not the D-wide output
         msg_edge = torch.relu(self.msg_edge(rel.transpose(1, 2)))  # (B, N, N, D): [i, j] from o_ji
@@ -83,8 +106,8 @@ class CommRound(nn.Module):
         return self._post(x, agg), attn
 
     def aggregate_picks(self, x: Tensor, h: Tensor, rel: Tensor, picks: Tensor) -> tuple[Tensor, Tensor, Tensor]:
-        """The round with its mask given as picks (B, N, K) long (-1 = nobody, repeats count once): the same
-        function as ``aggregate(x, logits(h, rel), mask)`` but computed on the picked pairs only.
+        """Sparse path: the round with its mask given as picks (B, N, K) long (-1 = nobody, repeats count once):
+        the same function as ``aggregate(x, logits(h, rel), mask)`` computed on the picked pairs only.
         Returns the round output (B, N, D), the weights (B, N, N) and the mask (B, N, N) bool."""
         b, n, k = picks.shape
         valid = dedup_valid(picks) if k else torch.zeros_like(picks, dtype=torch.bool)  # (B, N, K)
@@ -95,20 +118,22 @@ class CommRound(nn.Module):
         q = self.query(h) * self.scale  # (B, N, D)
         o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, 2))  # (B, N, K, 2): receiver i's view of j
         logits = (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(2)).sum(-1)  # (B, N, K)
-        attn_k = softmax_last(logits.masked_fill(~valid, NEG)) * valid  # (B, N, K)
-        w = self.drop(attn_k)
         # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
         send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
         o_ji = rel.reshape(b, n * n, 2).gather(1, send.expand(-1, -1, 2)).view(b, n, k, 2)
         v = self.value(x)  # (B, N, D)
         v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
-        agg = (w.unsqueeze(-1) * (v_j + torch.relu(self.msg_edge(o_ji)))).sum(2)  # (B, N, D)
+        agg, attn_k = self.attend(logits, valid, self.message(v_j, o_ji))  # (B, N, D), (B, N, K)
         attn = torch.zeros(b, n, n, device=x.device).scatter_add(-1, idx, attn_k)  # repeats carry weight 0
         return self._post(x, agg), attn, mask
 
     def _post(self, x: Tensor, agg: Tensor) -> Tensor:
-        """(B, N, D) round input and aggregate -> round output y (post-LN block)."""
-        z = self.norm1(x + self.drop(self.out(agg)))
+        """(B, N, D) round input and aggregate -> round output y = finish(x + W_o agg + b_o)."""
+        return self.finish(x + self.drop(self.out(agg)))
+
+    def finish(self, z: Tensor) -> Tensor:
+        """(..., D) residual sum x + W_o agg + b_o -> round output: post-LN block LN(z' + FFN(z')), z' = LN(z)."""
+        z = self.norm1(z)
         return self.norm2(z + self.drop(self.ffn2(self.drop(torch.relu(self.ffn1(z))))))
 
 

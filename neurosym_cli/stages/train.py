@@ -12,7 +12,7 @@ from typing import Callable
 import torch
 
 from .. import __version__, artifacts, paths
-from ..config import ConfigError, ModelConfig, OptimConfig, RunConfig, TaskConfig
+from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
 from ..policy.comm import CommProvider
@@ -23,20 +23,15 @@ from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
 from .comm import baseline_comm
 
-# config sections that must match for a checkpoint to be resumed or extended
-_SECTIONS = {"task": TaskConfig, "model": ModelConfig, "optim": OptimConfig}
-
-
-def _defaults(section: str) -> dict:
-    """Default values of a config section (a key added after a checkpoint was saved compares as its default)."""
-    return {f.name: f.default for f in dataclasses.fields(_SECTIONS[section]) if f.default is not dataclasses.MISSING}
-
-
-def check_compatible(saved: dict, current: dict, path) -> None:
-    """A checkpoint is resumed or extended only under the same task, model and optimiser config."""
-    for key in _SECTIONS:
-        old, new, dflt = saved.get(key) or {}, current.get(key) or {}, _defaults(key)
-        if any(old.get(k, dflt.get(k)) != new.get(k, dflt.get(k)) for k in set(old) | set(new)):
+def check_compatible(saved: dict, cfg: RunConfig, current: dict, path) -> None:
+    """A checkpoint is resumed or extended only under the same task, model and optimiser config. Keys of the
+    current schemas that a checkpoint lacks (added later) compare as their defaults; keys the schemas no longer
+    have are ignored."""
+    for key in ("task", "model", "optim"):
+        old, new = saved.get(key) or {}, current.get(key) or {}
+        section = getattr(cfg, key)
+        dflt = {f.name: f.default for f in dataclasses.fields(section) if f.default is not dataclasses.MISSING}
+        if any(old.get(k, dflt.get(k)) != v for k, v in new.items()):
             raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "
                               f"or runs_root=... to train elsewhere")
 
@@ -81,7 +76,7 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
     state = None
     if ckpt.exists() and not cfg.overwrite:
         payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
-        check_compatible(payload["config"], info.config, ckpt)
+        check_compatible(payload["config"], cfg, info.config, ckpt)
         policy = artifacts.policy_from_payload(payload)
         state = FitState(**payload["fit"])
         if state.step >= spec.steps:

@@ -32,7 +32,7 @@ from ..dsl.ast import Program, RandomRule, Rule
 from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
 from ..envs.base import MultiAgentEnv, Observation
 from ..envs.features import PairFeatures
-from ..policy.transformer import NEG, CommTransformer
+from ..policy.transformer import CommTransformer
 from . import kernels
 from .dataset import DataBucket
 from .prepared import Prepared
@@ -182,20 +182,17 @@ class CachedScorer:
         # flat gathers (one index tensor each) are several times faster than 3-index advanced indexing
         pair = (rows[:, None] * n + pk).flatten()  # (M K,) flat index of pair (s, i, j)
         lg = d.logits_flat.index_select(0, pair).view(pk.shape)  # (M, K): l_ij of the picked j
-        # softmax over the <= K picked agents, written out: torch's softmax over a last dim of size K is slow on CPU
-        top = lg.masked_fill(~valid, NEG).amax(-1, keepdim=True)
-        e = torch.exp((lg - top).masked_fill(~valid, float("-inf")))  # 0 outside the picks; no inf * 0
-        attn = e / e.sum(-1, keepdim=True).clamp(min=1e-30)
         if d.messages is not None:
-            msg = d.messages.index_select(0, pair).view(*pk.shape, -1)  # (M, K, D) projected messages
+            msg = d.messages.index_select(0, pair).view(*pk.shape, -1)  # (M, K, D) messages projected by W_o
         else:
             s_n = (rows - rows % n)[:, None]  # (M, 1): s * N
             o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + (rows % n)[:, None]).flatten())
             vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten())
-            msg = F.linear(vals + torch.relu(layer.msg_edge(o_ji)), layer.out.weight).view(*pk.shape, -1)
-        agg = (attn.unsqueeze(-1) * msg).sum(1)  # (M, D): sum_k a_k W_o m_k
-        z = layer.norm1(d.base.index_select(0, rows) + agg)
-        return layer.norm2(z + layer.ffn2(torch.relu(layer.ffn1(z))))
+            msg = F.linear(layer.message(vals, o_ji), layer.out.weight).view(*pk.shape, -1)
+        # the policy's own attention over the picked agents (section 3.3), on cached logits and projected messages;
+        # base = x + b_o, so finish(base + sum_k a_k W_o m_k) is the round output (the policy is in eval mode)
+        agg, _ = layer.attend(lg, valid, msg)  # (M, D)
+        return layer.finish(d.base.index_select(0, rows) + agg)
 
     def _l1_rows(self, d: Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """(M,) L1 action error of the given rows (only valid for the last round)."""

@@ -10,7 +10,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from ..envs.features import PairFeatures
-from ..policy.transformer import NEG, CommTransformer
+from ..policy.transformer import CommTransformer, selected_attention
 from .dataset import DataBucket
 
 MEMO = 4  # memo slots per agent
@@ -44,8 +44,8 @@ class Prepared:
         self.messages: Tensor | None = None
         if self.s * self.n * self.n <= 32_000_000:
             self.messages = torch.cat([
-                F.linear(self.values[c:c + ch, None, :, :]
-                         + torch.relu(layer.msg_edge(self.rel[c:c + ch].transpose(1, 2))),  # [i, j] from o_ji
+                F.linear(layer.message(self.values[c:c + ch, None, :, :],
+                                       self.rel[c:c + ch].transpose(1, 2)),  # [i, j] = m_j->i from o_ji
                          layer.out.weight)
                 for c in range(0, self.s, ch)]).reshape(-1, x.shape[-1])  # (S N N, D): [s, i, j] = j -> i
         self.logits_flat = self.logits[round_idx].reshape(-1)  # (S N N,)
@@ -55,7 +55,7 @@ class Prepared:
         self.later: list[tuple[Tensor, Tensor]] = []
         for q in range(round_idx + 1, policy.n_rounds):
             lay = policy.rounds[q]
-            a = torch.softmax(self.logits[q].masked_fill(~others, NEG), -1) * others  # (S, N, N)
+            a = selected_attention(self.logits[q], others, dense=True)  # (S, N, N)
             c = torch.cat([(a[c:c + ch, :, :, None] * torch.relu(lay.msg_edge(self.rel[c:c + ch].transpose(1, 2))))
                            .sum(2) for c in range(0, self.s, ch)])  # (S, N, D)
             self.later.append((a, c))

@@ -3,7 +3,7 @@
 Each agent outputs weights p_i over the goals (in its own order: goals sorted by initial distance) and moves
 along sum_k p_ik (g_k - x_i), speed clipped to v_max (paper; ``velocity=reference`` uses the reference's
 v_max * sum_k p_ik unit(g_k - x_i)). The loss of a step is N - sum_k max_i p_ik: the number of uncovered goals
-on the paper's plot scale (decisions.md).
+on the paper's plot scale (docs/fidelity.md).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from ..config import TaskConfig
+from ..config import UnlabeledConfig
 from ..utils.ops import softmax_last
 from .base import EnvState, EpisodeSeeder, Observation, Rng, clip_speed, eye_mask, safe_norm
 from .sampling import sample_in_boxes
@@ -20,7 +20,7 @@ from .sampling import sample_in_boxes
 class UnlabeledGoalsEnv:
     """Agent input s_i = [x_i, x_i - g_sigma_i(1), ..., x_i - g_sigma_i(G)] (obs_dim 2 + 2G); action = G logits."""
 
-    def __init__(self, cfg: TaskConfig, horizon: int | None = None):
+    def __init__(self, cfg: UnlabeledConfig, horizon: int | None = None):
         self.cfg = cfg
         self.horizon = horizon or cfg.horizon
         self.n = cfg.agents_per_group
