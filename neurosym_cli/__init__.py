@@ -1,3 +1,16 @@
-"""neurosym: neurosymbolic transformers for multi-agent communication (NeurIPS 2020), as a CLI."""
+"""neurosym: neurosymbolic transformers for multi-agent communication (NeurIPS 2020), as a CLI.
+
+Packages are cut by concept. Import layers, lowest first: a module imports from its own layer and the layers
+below it, never from above (tests/test_layers.py reads this table and checks every import, lazy ones included):
+
+    layer 0: config baselines paths utils        typed schemas, the baseline registry, artifact names, helpers
+    layer 1: dsl envs                            the program language; the batched differentiable tasks
+    layer 2: policy                              the transformer and the communication providers
+    layer 3: artifacts rollout plotting          checkpoints; one batched rollout; figures
+    layer 4: training evaluation synth           the training loop; the evaluation protocol; program search
+    layer 5: stages                              what each verb does to a run directory; the stage graph
+    layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
+    layer 7: cli                                 the console script
+"""
 
 __version__ = "0.1.0"

@@ -8,6 +8,8 @@ from hypothesis import strategies as st
 from neurosym_cli.dsl import And, ArgMaxRule, Linear, Or, Program, ProgramSyntaxError, RandomRule, TrueCond
 from neurosym_cli.dsl import Test as T
 from neurosym_cli.dsl import describe, parse, to_text
+from neurosym_cli.dsl.ast import cond_features
+from neurosym_cli.dsl.printer import _NAMES
 from neurosym_cli.dsl.interpret import program_mask, rule_picks
 
 
@@ -122,7 +124,11 @@ def test_parse_print_round_trip(p):
     assert to_text(parse(text)) == text
     for rules in p.rounds:
         for r in rules:
-            assert describe(r)
+            reading = describe(r)
+            # a reading names the rule's kind and every feature its filter tests (by name or by its word)
+            assert reading.startswith("ask a random agent" if isinstance(r, RandomRule) else "ask the"), reading
+            for name in cond_features(r.cond):
+                assert name in reading or _NAMES.get(name, name) in reading, (name, reading)
 
 
 def test_paper_examples_read_as_written():

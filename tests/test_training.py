@@ -2,6 +2,7 @@
 
 import copy
 
+import pytest
 import torch
 
 from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig, GridConfig
@@ -23,6 +24,7 @@ def _policy(env):
     return CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
 
 
+@pytest.mark.slow
 def test_loss_falls_on_a_small_case():
     env = make_env(SMALL)
     pol = _policy(env)
@@ -77,6 +79,7 @@ def test_step_per_bucket_takes_one_adam_step_per_bucket():
     assert st.step == 1 and adam_steps == n_buckets > 1
 
 
+@pytest.mark.slow
 def test_retraining_under_a_fixed_program_reduces_its_loss():
     """Paper section 3.5: the oracle's weights fitted to soft attention do worse under a program's hard
     attention; training under the program (same loop) recovers."""

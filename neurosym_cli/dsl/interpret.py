@@ -30,10 +30,6 @@ class UniformSource(Protocol):
     def rand(self, batch: int, *shape: int) -> Tensor: ...
 
 
-class UnknownFeature(KeyError):
-    pass
-
-
 def linear(f: Linear, feats: FeatureView) -> Tensor:
     """(B, N, N) value of sum_k w_k phi_k."""
     b, n = feats.batch, feats.n_agents

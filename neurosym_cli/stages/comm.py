@@ -8,7 +8,8 @@ from ..config import ConfigError, RunConfig
 from ..dsl.ast import Program
 from ..envs.features import feature_names
 from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm
-from ..utils.io import ArtifactError, load_program, read_json
+from ..dsl.files import load_program
+from ..utils.io import ArtifactError, read_json
 
 
 def check_program(program: Program, cfg: RunConfig, source: str) -> None:

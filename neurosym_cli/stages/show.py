@@ -14,7 +14,7 @@ from ..config import RunConfig
 from ..dsl.ast import Program
 from ..dsl.printer import describe, rule_text
 from ..utils.console import console
-from ..utils.io import load_program
+from ..dsl.files import load_program
 
 
 def render(program: Program, rounds: list[dict] | None, lam: float | None, title: str = "program") -> None:

@@ -16,7 +16,8 @@ from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
 from ..utils.console import SearchDisplay, console, log, use_rich
 from ..utils.device import resolve_device
-from ..utils.io import save_program, write_csv, write_json
+from ..dsl.files import save_program
+from ..utils.io import write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
 from .show import render

@@ -52,25 +52,5 @@ def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
 def read_json(path: Path) -> Any:
     try:
         return json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as e:
+    except (OSError, ValueError) as e:  # unreadable, not UTF-8, or not JSON
         raise ArtifactError(f"cannot read {path}: {e}") from None
-
-
-
-
-def save_program(path: Path, text: str, header: Sequence[str]) -> None:
-    """Program text with '#' comment lines in front (the parser skips them)."""
-    write_text(Path(path), "".join(f"# {h}\n" for h in header) + text)
-
-
-def load_program(path: Path, made_by: str):
-    """Parse a program file; a missing file names the command that makes it, bad text its line and column."""
-    from ..dsl.parser import ProgramSyntaxError, parse
-
-    path = Path(path)
-    if not path.exists():
-        raise ArtifactError(f"no program at {path}; create it with `{made_by}`")
-    try:
-        return parse(path.read_text(), source=str(path))
-    except ProgramSyntaxError as e:
-        raise ArtifactError(f"malformed program: {e}") from None

@@ -1,0 +1,305 @@
+"""docs/results.md from one template (docs/results.template.md) and the small result files beside it (docs/results/).
+
+    python benchmarks/results_doc.py --collect   # outputs/ (the paper protocol's artifacts) -> docs/results/*.json
+    python benchmarks/results_doc.py             # docs/results/*.json + the template -> docs/results.md
+    python benchmarks/results_doc.py --check     # exit 1 when docs/results.md is not what the files give
+
+Every number of the document comes from the result files: one per variant of the protocol (a task, with the
+lambda and objective of its programs), holding each baseline's summary (mean and std over the evaluation seeds),
+its per-seed losses (for paired intervals), the synthesized programs and the stage times; and run.json (wall
+times of the whole protocol). The template's placeholders, ``{{op args}}``, are looked up in a table of
+functions below (never evaluated as code):
+
+    {{section V}}            the table, figure, programs, stage times and claim lines of variant V
+    {{glance}}               the claims-at-a-glance tables of every variant
+    {{mean V B M D}}         baseline B's mean of metric M in variant V, D digits (M: cost, max_in, max_out, ...)
+    {{half V B M D}}         half of it (mean degree / 2 = edges heard per agent and step)
+    {{per V B M1 M2 D}}      mean of M1 / mean of M2
+    {{paired V A B D}}       paired loss difference A - B over the evaluation seeds with its 95 % t half-width
+    {{gap V A B}}            relative loss difference A vs B, in percent
+    {{run KEY D}}            a figure of run.json (minutes)
+
+Loss claims use paired differences over the evaluation seeds (every baseline sees the same episodes for a seed)
+with a 95 % t-interval.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
+RESULTS = DOCS / "results"
+TEMPLATE = DOCS / "results.template.md"
+T95 = {19: 2.093, 9: 2.262, 4: 2.776, 1: 12.706}  # two-sided 95% t quantiles by degrees of freedom
+METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree", "collisions")
+ORDER = ["tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
+         "dt-retrained", "no-comm"]
+
+# variant -> (task, lambda of its programs or None for the task's, objective); the protocol's one command per
+# task, and the two follow-up searches (run_paper.py --followups)
+VARIANTS = {
+    "random-cross": ("random-cross", None, "paper"),
+    "random-grid": ("random-grid", None, "paper"),
+    "random-grid-lam0.2": ("random-grid", 0.2, "paper"),
+    "unlabeled-goals": ("unlabeled-goals", None, "paper"),
+    "unlabeled-goals-hinge": ("unlabeled-goals", None, "hinge"),
+}
+FORMATION = ("random-cross", "random-grid")
+
+
+# ------------------------------------------------------------------------------------------------ collect
+def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
+    """The artifacts of the paper protocol under ``root`` -> one small JSON file per variant, run.json, figures."""
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    for name, (task, lam, objective) in VARIANTS.items():
+        exp = root / task / budget / f"seed{seed}"
+        out: dict = {"task": task, "objective": objective, "baselines": {}, "programs": {}}
+        for f in sorted(exp.glob("eval/*/metrics.json")):
+            m = json.loads(f.read_text())
+            c = m["config"]
+            if c["baseline"]["comm"] == "program":
+                if c["lam"] != (c["task"]["lam"] if lam is None else lam) or c["synth"]["objective"] != objective:
+                    continue
+                out["lam"], out["rules"], out["features"] = c["lam"], c["rules"], c["features"]
+            out["baselines"][m["baseline"]] = {
+                "label": m["label"],
+                "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
+                "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]},
+            }
+            out["seeds"] = m["seeds"]
+        if not out["baselines"]:
+            print(f"no evaluations for {name} under {exp}; skipped", file=sys.stderr)
+            continue
+        suffix = f"-lam{out['lam']:g}-{out['features']}" + ("" if objective == "paper" else f"-{objective}")
+        for p in sorted(exp.glob("synth/*/program.txt")):
+            if p.parent.name.endswith(suffix):
+                out["programs"][p.parent.name] = p.read_text().strip()
+        timing = exp / "pipeline_timings.json"
+        if name == task and timing.exists():
+            out["timings"] = json.loads(timing.read_text())
+            fig = exp / "eval" / "figure2.png"
+            if fig.exists():
+                (DOCS / "figures").mkdir(exist_ok=True)
+                shutil.copyfile(fig, DOCS / "figures" / f"{task}.png")
+        (RESULTS / f"{name}.json").write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+        print(f"wrote {RESULTS / (name + '.json')}: {len(out['baselines'])} baselines")
+    logs = root / "logs" / "paper"
+    run = {}
+    if (logs / "jobs.json").exists():
+        jobs = json.loads((logs / "jobs.json").read_text())
+        run["wall_min"] = jobs["wall_s"] / 60
+        run["worker_min"] = sum(s or 0 for s in jobs["stages"].values()) / 60
+    if (logs / "followups.json").exists():
+        fol = json.loads((logs / "followups.json").read_text())
+        run["followups_min"] = max(v["seconds"] for v in fol.values()) / 60
+    (RESULTS / "run.json").write_text(json.dumps(run, indent=1, sort_keys=True) + "\n")
+
+
+# ------------------------------------------------------------------------------------------------- render
+def load() -> tuple[dict[str, dict], dict]:
+    variants = {n: json.loads((RESULTS / f"{n}.json").read_text()) for n in VARIANTS if (RESULTS / f"{n}.json").exists()}
+    run = json.loads((RESULTS / "run.json").read_text()) if (RESULTS / "run.json").exists() else {}
+    return variants, run
+
+
+def mean(v: dict, b: str, k: str = "cost") -> float:
+    return v["baselines"][b]["summary"][k]["mean"]
+
+
+def ms(v: dict, b: str, k: str, digits: int = 2) -> str:
+    s = v["baselines"][b]["summary"][k]
+    return f"{s['mean']:.{digits}f} ± {s['std']:.{digits}f}"
+
+
+def paired(v: dict, a: str, b: str) -> tuple[float, float]:
+    """Mean and 95% half-width of a - b over the evaluation seeds both share."""
+    xa, xb = v["baselines"][a]["cost_per_seed"], v["baselines"][b]["cost_per_seed"]
+    d = [xa[s] - xb[s] for s in sorted(set(xa) & set(xb), key=int)]
+    n = len(d)
+    m = sum(d) / n
+    sd = math.sqrt(sum((x - m) ** 2 for x in d) / (n - 1)) if n > 1 else 0.0
+    return m, T95.get(n - 1, 1.96) * sd / math.sqrt(n)
+
+
+def pm(x: tuple[float, float], digits: int = 2) -> str:
+    """A paired difference as the document writes it: signed, with a true minus sign."""
+    return f"{x[0]:+.{digits}f} ± {x[1]:.{digits}f}".replace("-", "−")
+
+
+def gap(v: dict, a: str, b: str) -> float:
+    return (mean(v, a) - mean(v, b)) / mean(v, b) * 100
+
+
+def verdict(ok: bool) -> str:
+    return "**supported**" if ok else "**not supported**"
+
+
+def claims(task: str, v: dict) -> list[tuple[str, str, str, bool]]:
+    """(short claim, long line, glance cell, holds) for each claim of the paper on this task."""
+    pr = "prog-retrained"
+    out = []
+    if task in FORMATION:
+        g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
+        out.append(("prog-retrained loss close to tf-full (within 5 %)",
+                    f"prog-retrained loss close to tf-full (within 5%): {mean(v, pr):.2f} vs {mean(v, 'tf-full'):.2f}, "
+                    f"{g:+.1f}% (paired difference {d[0]:+.2f} ± {d[1]:.2f})", f"{g:+.1f} %".replace("-", "−"),
+                    abs(g) <= 5))
+        d = paired(v, pr, "dist")
+        ok = d[0] + d[1] < 0
+        out.append(("prog-retrained better than dist",
+                    f"prog-retrained better than dist: {mean(v, pr):.2f} vs {mean(v, 'dist'):.2f} (paired difference "
+                    f"{d[0]:+.2f} ± {d[1]:.2f})" + ("" if ok else (" (lower on average, not significant)" if d[0] < 0
+                                                                     else "")),
+                    pm(d) + ("" if ok else ", not significant" if d[0] < 0 else ""), ok))
+        ok = mean(v, pr, "max_out") < mean(v, "hard-attn", "max_out")
+        out.append(("prog-retrained max out-degree lower than hard-attn",
+                    f"prog-retrained max out-degree lower than hard-attn: {ms(v, pr, 'max_out')} vs "
+                    f"{ms(v, 'hard-attn', 'max_out')}",
+                    f"{mean(v, pr, 'max_out'):.1f} vs {mean(v, 'hard-attn', 'max_out'):.1f}", ok))
+        d = paired(v, "prog", pr)
+        ok = d[0] - d[1] > 0
+        out.append(("retraining is needed (prog worse than prog-retrained)",
+                    f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.2f} vs "
+                    f"{mean(v, pr):.2f} (paired difference {d[0]:+.2f} ± {d[1]:.2f})"
+                    + ("" if ok else (" (worse on average, not significant)" if d[0] > 0 else "")),
+                    f"{mean(v, 'prog'):.1f} vs {mean(v, pr):.1f}", ok))
+        ok = mean(v, "det-prog-retrained", "max_out") > mean(v, pr, "max_out")
+        out.append(("det-prog-retrained has a worse max out-degree",
+                    f"det-prog-retrained has a worse max out-degree than prog-retrained: "
+                    f"{ms(v, 'det-prog-retrained', 'max_out')} vs {ms(v, pr, 'max_out')}",
+                    f"{mean(v, 'det-prog-retrained', 'max_out'):.2f} vs {mean(v, pr, 'max_out'):.2f}", ok))
+        ok = mean(v, "dt", "max_in") > mean(v, pr, "max_in") or mean(v, "dt", "max_out") > mean(v, pr, "max_out")
+        out.append(("dt has poor degrees",
+                    f"dt has poor degrees: max in {ms(v, 'dt', 'max_in')}, max out {ms(v, 'dt', 'max_out')} vs "
+                    f"prog-retrained {ms(v, pr, 'max_in')}, {ms(v, pr, 'max_out')}",
+                    f"in {mean(v, 'dt', 'max_in'):.1f} / out {mean(v, 'dt', 'max_out'):.1f} vs "
+                    f"{mean(v, pr, 'max_in'):.1f} / {mean(v, pr, 'max_out'):.1f}", ok))
+        return out
+    ok = mean(v, pr) < 0.9 * 4.13
+    out.append(("prog-retrained well below 4.13 uncovered goals",
+                f"prog-retrained well below 4.13 uncovered goals (the paper's no-communication loss): "
+                f"{ms(v, pr, 'cost', 3)}", f"{mean(v, pr):.2f}", ok))
+    d = paired(v, pr, "no-comm")
+    ok = d[0] + d[1] < 0
+    out.append((f"... and below our own no-comm ({mean(v, 'no-comm'):.2f})",
+                f"... and below our own no-comm model ({ms(v, 'no-comm', 'cost', 3)}; paired difference "
+                f"{d[0]:+.3f} ± {d[1]:.3f})", pm(d) + ("" if ok else ", not significant"), ok))
+    g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
+    out.append((f"prog-retrained close to tf-full ({mean(v, 'tf-full'):.2f}, within 10 %)",
+                f"prog-retrained close to tf-full (within 10%): {mean(v, pr):.3f} vs {mean(v, 'tf-full'):.3f}, "
+                f"{g:+.1f}% (paired difference {d[0]:+.3f} ± {d[1]:.3f})",
+                f"{g:+.1f} % ({pm(d, 3)})".replace("-", "−"), abs(g) <= 10))
+    ok = mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
+    out.append(("prog-retrained has a smaller max degree than tf-full",
+                f"prog-retrained has a smaller max degree than tf-full: {ms(v, pr, 'max_degree')} vs "
+                f"{ms(v, 'tf-full', 'max_degree')}",
+                f"{mean(v, pr, 'max_degree'):.1f} vs {mean(v, 'tf-full', 'max_degree'):.0f}", ok))
+    return out
+
+
+def title(name: str, v: dict) -> str:
+    _, lam, objective = VARIANTS[name]
+    if lam is None and objective == "paper":
+        return v["task"]
+    return f"{v['task']} (programs: lambda {v['lam']:g}, {objective} objective)"
+
+
+def section(name: str, v: dict) -> str:
+    task = v["task"]
+    out = [f"## {title(name, v)}", "", f"K = {v['rules']}, lambda = {v['lam']:g}, objective {v['objective']}, "
+           f"{v['seeds']} evaluation seeds; loss, max in-degree, max out-degree: mean ± std over the seeds.", "",
+           "| baseline | loss | max in-degree | max out-degree | mean degree |", "|---|---|---|---|---|"]
+    digits = 3 if task == "unlabeled-goals" else 2
+    for b in sorted(v["baselines"], key=lambda b: ORDER.index(b) if b in ORDER else len(ORDER)):
+        out.append(f"| {b} | {ms(v, b, 'cost', digits)} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
+                   f"{ms(v, b, 'mean_degree')} |")
+    if name == task and (DOCS / "figures" / f"{task}.png").exists():
+        out += ["", f"![{task}: loss vs max degree](figures/{task}.png)"]
+    out += ["", "Synthesized programs (`neurosym show-program` prints them with a plain-language reading):", ""]
+    for tag, text in sorted(v["programs"].items()):
+        out += [f"`{tag}`:", "", "```", text, "```", ""]
+    if "timings" in v:
+        t = v["timings"]
+        total = sum(t.values())
+        out += ["Wall time per stage (one CPU thread each, two stages at a time on the 2 cores):", "",
+                "| stage | seconds |", "|---|---|"] + [f"| {k} | {s:.0f} |" for k, s in t.items()]
+        out += [f"| **total** | **{total:.0f}** ({total / 60:.1f} min) |", ""]
+    out += ["Claims of the paper:", ""] + [f"- {long} -> {verdict(ok)}" for _, long, _, ok in claims(task, v)]
+    return "\n".join(out) + "\n"
+
+
+def glance(variants: dict[str, dict]) -> str:
+    """One table per task family: a row per claim, a column per variant; each cell says yes or no and why."""
+    out = []
+    for family, names in (("paper section 4", [n for n in variants if variants[n]["task"] in FORMATION]),
+                          ("unlabeled-goals", [n for n in variants if variants[n]["task"] == "unlabeled-goals"])):
+        if not names:
+            continue
+        cols = [f"{variants[n]['task']} (λ {variants[n]['lam']:g}"
+                + (", hinge objective)" if variants[n]["objective"] == "hinge" else ")") for n in names]
+        rows = [claims(variants[n]["task"], variants[n]) for n in names]
+        out += [f"| claim ({family}) | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
+        for k, (short, *_rest) in enumerate(rows[0]):
+            cells = [("yes, " if r[k][3] else "**no**: ") + r[k][2] for r in rows]
+            out.append(f"| {short} | " + " | ".join(cells) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+def render(template: str, variants: dict[str, dict], run: dict) -> str:
+    def fmt(x: float, digits: str) -> str:
+        return f"{x:.{int(digits)}f}".replace("-", "−")
+
+    ops = {
+        "section": lambda n: section(n, variants[n]).rstrip("\n"),
+        "glance": lambda: glance(variants).rstrip("\n"),
+        "mean": lambda n, b, m, d: fmt(mean(variants[n], b, m), d),
+        "half": lambda n, b, m, d: fmt(mean(variants[n], b, m) / 2, d),
+        "per": lambda n, b, m1, m2, d: fmt(mean(variants[n], b, m1) / mean(variants[n], b, m2), d),
+        "paired": lambda n, a, b, d: pm(paired(variants[n], a, b), int(d)),
+        "gap": lambda n, a, b: f"{gap(variants[n], a, b):+.1f} %".replace("-", "−"),
+        "run": lambda key, d: fmt(run[key], d),
+    }
+
+    def sub(m: re.Match) -> str:
+        op, *args = m.group(1).split()
+        if op not in ops:
+            raise SystemExit(f"{TEMPLATE}: unknown placeholder {{{{{m.group(1)}}}}}")
+        try:
+            return ops[op](*args)
+        except (KeyError, TypeError, ValueError) as e:
+            raise SystemExit(f"{TEMPLATE}: placeholder {{{{{m.group(1)}}}}}: {type(e).__name__} {e}") from None
+
+    return re.sub(r"\{\{([^{}]+)\}\}", sub, template)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--collect", action="store_true", help="first write docs/results/ from the artifacts")
+    ap.add_argument("--root", default=str(ROOT / "outputs"), help="runs root of the paper protocol's artifacts")
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/results.md differs from the render")
+    a = ap.parse_args()
+    if a.collect:
+        collect(Path(a.root))
+    text = render(TEMPLATE.read_text(), *load())
+    target = DOCS / "results.md"
+    if a.check:
+        if target.read_text() != text:
+            print("docs/results.md is not what docs/results.template.md and docs/results/ give; "
+                  "run python benchmarks/results_doc.py", file=sys.stderr)
+            raise SystemExit(1)
+        print("docs/results.md matches its template and result files")
+        return
+    target.write_text(text)
+    print(f"wrote {target}")
+
+
+if __name__ == "__main__":
+    main()
