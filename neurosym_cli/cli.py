@@ -100,6 +100,40 @@ def check_choices(args: list[str]) -> str | None:
     return None
 
 
+READ_ONLY = ("show-program", "report")
+"""commands that only read a runs directory: they run on an archived (read-only) one, logging elsewhere"""
+
+
+def _runs_root(args: list[str]) -> str:
+    for a in args:
+        if a.startswith(("runs_root=", "+runs_root=", "++runs_root=")):
+            return a.split("=", 1)[1].strip("'\"")
+    return os.environ.get("NEUROSYM_RUNS", "outputs")
+
+
+def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
+    """Where the runs root cannot hold Hydra's log directory: one line for a command that writes there, and for a
+    read-only command its logs moved to the temp directory. Returns (args, error)."""
+    from pathlib import Path
+
+    root = Path(_runs_root(args)).expanduser().absolute()
+    probe = root
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        return args, f"runs_root {root} lies under {probe}, which is a file, not a directory"
+    if os.access(probe, os.W_OK | os.X_OK):
+        return args, None
+    if cmd not in READ_ONLY:
+        return args, (f"cannot write to the runs directory {probe} (read-only); point runs_root=... (or "
+                      f"NEUROSYM_RUNS) at a writable directory")
+    import tempfile
+    import time
+
+    logs = Path(tempfile.gettempdir()) / "neurosym-logs" / f"{cmd}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
+    return [*args, f"hydra.run.dir={logs}", f"hydra.sweep.dir={logs}"], None
+
+
 def _complete() -> bool:
     """Bash completion through Hydra's hook: complete the subcommand, then delegate to its app."""
     line = os.environ.get("COMP_LINE", "")
@@ -117,6 +151,14 @@ def _complete() -> bool:
 
 
 def main() -> None:
+    try:
+        _main()
+    except KeyboardInterrupt:  # Ctrl-C before a command's own handler is in place (while torch imports)
+        print("neurosym: interrupted before the command started; nothing was written", file=sys.stderr)
+        raise SystemExit(130) from None
+
+
+def _main() -> None:
     argv = sys.argv[1:]
     if argv[:2] == ["-sc", "query=bash"] and "COMP_LINE" in os.environ:
         if _complete():
@@ -136,7 +178,13 @@ def main() -> None:
     if cmd not in COMMANDS:
         print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
         raise SystemExit(2)
-    bad = check_choices(rest)
+    from neurosym_cli.overrides import check
+
+    bad = check_choices(rest) or check(rest)
+    if bad:
+        print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
+        raise SystemExit(2)
+    rest, bad = _log_dir(cmd, rest)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)

@@ -7,6 +7,7 @@ schemas of the primary configs, so a typo or a wrongly typed override fails at c
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -100,6 +101,11 @@ class CrossConfig(FormationConfig):
     group_prob: float = 0.33
     """probability that each non-guaranteed group is present (paper section 4; one group always is)"""
 
+    @property
+    def max_agents(self) -> int:
+        """N of the largest episode (every group present)."""
+        return self.num_groups * self.agents_per_group
+
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(self.num_groups >= 1, "task.num_groups must be positive")
@@ -112,6 +118,11 @@ class GridConfig(FormationConfig):
 
     env: str = "random-grid"
     ell: float = 14.0
+
+    @property
+    def max_agents(self) -> int:
+        """N of every episode: three groups."""
+        return 3 * self.agents_per_group
 
 
 @dataclass
@@ -132,6 +143,11 @@ class UnlabeledConfig(TaskConfig):
     """minimum separation between goals"""
     velocity: str = "paper"
     """paper (sum_k p_k (g_k - x)) or reference (v_max * sum_k p_k unit(g_k - x))"""
+
+    @property
+    def max_agents(self) -> int:
+        """N of every episode (as many agents as goals)."""
+        return self.agents_per_group
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -329,6 +345,11 @@ class RunConfig:
                f"device must be auto, cpu or cuda, got {self.device!r}")
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
+        cpus = os.cpu_count() or 1
+        _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")
+        n = getattr(self.task, "max_agents", None)  # the base schema (tests, defaults) has no team size
+        _check(n is None or self.rules < n, f"rules={self.rules}: an agent of {self.task.name} has at most {n} - 1 "
+               f"others to hear (K is also the k of hard-attn and dist)")
         _check(self.features in ("v1", "v2"), f"features must be v1 or v2, got {self.features!r}")
 
     @property

@@ -8,9 +8,26 @@
 
 from __future__ import annotations
 
+import hashlib
+import re
 from pathlib import Path
 
 from .config import RunConfig
+
+
+def user_program_tag(cfg: RunConfig) -> str | None:
+    """'file-<stem>-<8 hex of its SHA-1>-<features>' for a program given as program=PATH, else None: results of a
+    hand-written program never take the name (and overwrite the results) of a synthesized one, and two different
+    files never share one."""
+    if not cfg.program:
+        return None
+    path = Path(cfg.program)
+    try:
+        digest = hashlib.sha1(path.read_bytes()).hexdigest()[:8]
+    except OSError:  # missing or unreadable: loading it reports that in one line
+        digest = "unreadable"
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem)[:40] or "program"
+    return f"file-{stem}-{digest}-{cfg.features}"
 
 
 def model_name(cfg: RunConfig) -> str:
@@ -32,6 +49,8 @@ def program_tag(cfg: RunConfig) -> str:
     when it is not the paper's (dt: K, features)."""
     if cfg.baseline.comm == "tree":
         return f"dt-k{cfg.rules}-{cfg.features}"
+    if cfg.baseline.comm == "program" and cfg.program:
+        return user_program_tag(cfg)  # type: ignore[return-value]
     return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
 
 
@@ -39,6 +58,8 @@ def baseline_label(cfg: RunConfig) -> str:
     """Name of a baseline's evaluation directory (k, and the program's tag, where they matter)."""
     if cfg.baseline.comm in ("full", "none"):
         return cfg.baseline.name
+    if cfg.baseline.comm == "program" and cfg.program:
+        return f"{cfg.baseline.name}-{user_program_tag(cfg)}"
     if cfg.baseline.comm == "program":
         return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
     if cfg.baseline.comm == "tree":
@@ -88,8 +109,9 @@ def retrain_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
     det = " baseline=dt-retrained" if cfg.baseline.comm == "tree" else det
     obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) else ""
+    prog = f" program={cfg.program}" if cfg.program and cfg.baseline.comm == "program" else ""
     return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
-            f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")
+            f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}{prog}")
 
 
 def synth_command(cfg: RunConfig) -> str:

@@ -15,12 +15,25 @@ def save_program(path: Path, text: str, header: Sequence[str]) -> None:
     write_text(Path(path), "".join(f"# {h}\n" for h in header) + text)
 
 
-def load_program(path: Path, made_by: str) -> Program:
-    """Parse a program file; a missing file names the command that makes it, bad text its line and column."""
+def load_program(path: Path, made_by: str | None = None) -> Program:
+    """Parse a program file; errors are one line: a missing file names the command that makes it (``made_by``, for
+    a synthesized program; None for a file the user gave), bad text its line and column."""
     path = Path(path)
+    again = f"; `{made_by} overwrite=true` searches it again" if made_by else ""
     if not path.exists():
-        raise ArtifactError(f"no program at {path}; create it with `{made_by}`")
+        raise ArtifactError(f"no program at {path}" + (f"; create it with `{made_by}`" if made_by else ""))
+    if not path.is_file():
+        raise ArtifactError(f"{path} is not a file; program= takes the path of a program text file")
     try:
-        return parse(path.read_text(), source=str(path))
+        data = path.read_bytes()
+    except OSError as e:
+        raise ArtifactError(f"cannot read {path}: {e.strerror or e}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data[: e.start].count(b"\n") + 1
+        raise ArtifactError(f"malformed program: {path}:{line}: not UTF-8 text (byte {e.start}){again}") from None
+    try:
+        return parse(text, source=str(path))
     except ProgramSyntaxError as e:
-        raise ArtifactError(f"malformed program: {e}") from None
+        raise ArtifactError(f"malformed program: {e}{again}") from None

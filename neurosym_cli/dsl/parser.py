@@ -12,6 +12,7 @@ Errors name the line and column.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -26,8 +27,15 @@ class ProgramSyntaxError(ValueError):
         self.line, self.col, self.msg = line, col, msg
 
 
-_TOKEN = re.compile(r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
-                    r"|(?P<op>>=|<=|[-+*(),:]))")
+_TOKEN = re.compile(r"(?:(?P<num>\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+                    r"|(?P<op>>=|<=|[-+*(),:]))", re.ASCII)  # ASCII: digits of other scripts are not numbers
+_SPACE = re.compile(r"\s*")
+
+MAX_LINE = 10_000
+"""characters in one line of program text: a rule of the search is under 200; longer text is refused, not parsed"""
+MAX_DEPTH = 64
+"""nesting of a filter's and / or / parentheses: the search writes depth 2; deeper trees are refused before they
+reach the recursive printer and evaluator"""
 
 
 @dataclass
@@ -37,18 +45,24 @@ class _Tok:
     col: int  # 1-based
 
 
+def _shown(text: str) -> str:
+    """A token as an error message quotes it: at most 40 characters."""
+    return repr(text if len(text) <= 40 else text[:37] + "...")
+
+
 def _tokenize(line: str, lineno: int, source: str) -> list[_Tok]:
-    toks, pos = [], 0
+    """Tokens of one line, in one left-to-right pass (linear in the line's length)."""
+    if len(line) > MAX_LINE:
+        raise ProgramSyntaxError(f"line is {len(line):,} characters long; a rule fits in {MAX_LINE:,}", lineno, 1,
+                                 source)
+    toks, pos = [], _SPACE.match(line, 0).end()
     while pos < len(line):
-        if line[pos:].strip() == "":
-            break
         m = _TOKEN.match(line, pos)
-        if not m or m.end() == pos:
-            col = pos + 1 + (len(line[pos:]) - len(line[pos:].lstrip()))
-            raise ProgramSyntaxError(f"unexpected character {line[col - 1]!r}", lineno, col, source)
+        if not m:
+            raise ProgramSyntaxError(f"unexpected character {line[pos]!r}", lineno, pos + 1, source)
         kind = m.lastgroup or "op"
         toks.append(_Tok(kind, m.group(kind), m.start(kind) + 1))
-        pos = m.end()
+        pos = _SPACE.match(line, m.end()).end()
     toks.append(_Tok("end", "", len(line.rstrip()) + 1))
     return toks
 
@@ -62,7 +76,7 @@ class _LineParser:
 
     def fail(self, msg: str, tok: _Tok | None = None) -> ProgramSyntaxError:
         tok = tok or self.peek()
-        found = "end of line" if tok.kind == "end" else repr(tok.text)
+        found = "end of line" if tok.kind == "end" else _shown(tok.text)
         return ProgramSyntaxError(f"{msg}, found {found}", self.lineno, tok.col, self.source)
 
     def expect(self, text: str) -> _Tok:
@@ -84,13 +98,20 @@ class _LineParser:
         if tok.kind != "num":
             raise self.fail("expected a number")
         self.i += 1
-        v = float(tok.text)
+        v = self.finite(tok)
         return -v if neg else v
+
+    def finite(self, tok: _Tok) -> float:
+        """The value of a number token; one that overflows a float (1e400) is an error, not inf."""
+        v = float(tok.text)
+        if not math.isfinite(v):
+            raise ProgramSyntaxError(f"number {_shown(tok.text)} is out of range", self.lineno, tok.col, self.source)
+        return v
 
     def term(self, sign: float) -> tuple[str, float]:
         tok = self.peek()
         if tok.kind == "num":
-            w = float(tok.text)
+            w = self.finite(tok)
             self.i += 1
             self.expect("*")
             tok = self.peek()
@@ -113,12 +134,14 @@ class _LineParser:
             raise self.fail("a feature appears twice in one linear form", start)
         return Linear(tuple(terms))
 
-    def atom(self) -> Cond:
+    def atom(self, depth: int) -> Cond:
         if self.peek().kind == "name" and self.peek().text == "true":
             self.i += 1
             return TrueCond()
-        if self.accept("("):
-            c = self.cond()
+        if self.peek().text == "(" and self.peek().kind == "op":
+            self.nest(depth)
+            self.i += 1
+            c = self.cond(depth + 1)
             self.expect(")")
             return c
         lhs = self.linear()
@@ -127,18 +150,27 @@ class _LineParser:
         self.expect(">=")
         return Test(lhs, self.number())
 
-    def conj(self) -> Cond:
-        c = self.atom()
+    def nest(self, depth: int) -> None:
+        """Each 'and', 'or' and parenthesis adds a level to the filter's tree; refuse trees deeper than MAX_DEPTH."""
+        if depth >= MAX_DEPTH:
+            raise self.fail(f"filter nested deeper than {MAX_DEPTH} levels")
+
+    def conj(self, depth: int) -> Cond:
+        c = self.atom(depth)
         while self.peek().kind == "name" and self.peek().text == "and":
+            depth += 1
+            self.nest(depth)
             self.i += 1
-            c = And(c, self.atom())
+            c = And(c, self.atom(depth))
         return c
 
-    def cond(self) -> Cond:
-        c = self.conj()
+    def cond(self, depth: int = 0) -> Cond:
+        c = self.conj(depth)
         while self.peek().kind == "name" and self.peek().text == "or":
+            depth += 1
+            self.nest(depth)
             self.i += 1
-            c = Or(c, self.conj())
+            c = Or(c, self.conj(depth))
         return c
 
     def filter(self) -> Cond:

@@ -28,7 +28,7 @@ def baseline_comm(cfg: RunConfig) -> CommProvider:
     """The provider of ``cfg.baseline``: a program or tree from the run directory (or ``program=``), or a rule."""
     if cfg.baseline.comm == "program":
         path = paths.program_file(cfg)
-        program = load_program(path, paths.synth_command(cfg))
+        program = load_program(path, None if cfg.program else paths.synth_command(cfg))
         check_program(program, cfg, str(path))
         return ProgramComm(program, cfg.task.kind, cfg.features)
     if cfg.baseline.comm == "tree":
@@ -37,7 +37,11 @@ def baseline_comm(cfg: RunConfig) -> CommProvider:
         path = paths.tree_file(cfg)
         if not path.exists():
             raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
-        rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
+        try:
+            rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
+        except (KeyError, TypeError, ValueError, IndexError) as e:
+            raise ArtifactError(f"corrupt tree {path} ({type(e).__name__}); `{paths.synth_command(cfg)} "
+                                f"overwrite=true` fits it again") from None
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
         return TreeComm(rounds, cfg.task.kind, cfg.features)

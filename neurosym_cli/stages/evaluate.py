@@ -11,6 +11,7 @@ from ..envs import make_env
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
 from ..utils.device import resolve_device
+from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
 from .comm import baseline_comm
@@ -34,12 +35,17 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo) -> dict:
     summary = summarize(rows)
     label = paths.baseline_label(cfg)
     out = paths.eval_dir(cfg)
+    with run_lock(out):
+        _write(cfg, info, out, label, rows, summary, seconds)
+    log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
+    return summary
+
+
+def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float) -> None:
     artifacts.write_csv(out / "metrics.csv", rows)
     artifacts.write_json(out / "metrics.json", {
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
-        "seeds": len(seeds), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
+        "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
         "config": info.config,
     })
-    log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
-    return summary

@@ -10,7 +10,7 @@ from .. import baselines
 from ..config import RunConfig
 from ..plotting import figure2
 from ..rollout import METRICS
-from ..utils.console import console, metrics_table
+from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
 
 COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
@@ -93,11 +93,15 @@ def report(cfg: RunConfig) -> dict:
     spread = "std over training seeds" if n > 1 else "std over evaluation seeds (one training seed)"
     where = str(root) if cfg.report_dir else f"{cfg.task.name} ({cfg.budget.name} budget)"
     head = f"{where}, {len(seeds)} training seed(s): mean ± {spread}"
-    write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
-                                      "baselines": {label: s for label, s in rows}})
-    write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
-                                                           for x in ("mean", "std")}} for label, s in rows])
-    png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
     console.print(metrics_table(head, rows, COLUMNS))
+    try:
+        write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
+                                          "baselines": {label: s for label, s in rows}})
+        write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
+                                                               for x in ("mean", "std")}} for label, s in rows])
+        png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
+    except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
+        log.warning("report files not written (%s); the table above is the report", e)
+        return {"report": None}
     console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}")
     return {"report": str(root / "report.json")}

@@ -41,7 +41,7 @@ def render(program: Program, rounds: list[dict] | None, lam: float | None, title
 def show_program(cfg: RunConfig) -> dict:
     """The program of ``cfg`` (or ``program=PATH``) with the objective terms from its summary.json, if readable."""
     path = paths.program_file(cfg)
-    program = load_program(path, paths.synth_command(cfg))
+    program = load_program(path, None if cfg.program else paths.synth_command(cfg))
     rounds, lam = None, None
     summary = path.parent / "summary.json"
     if summary.is_file():

@@ -16,10 +16,12 @@ from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
 from ..utils.console import SearchDisplay, console, log, use_rich
 from ..utils.device import resolve_device
-from ..dsl.files import save_program
+from ..utils.lock import run_lock
+from ..dsl.files import load_program, save_program
 from ..utils.io import write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
+from .comm import baseline_comm
 from .show import render
 
 
@@ -31,9 +33,21 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
                           f"not {cfg.baseline.name}")
     out = paths.synth_dir(cfg)
     result = out / ("tree.json" if cfg.baseline.comm == "tree" else "program.txt")
+    if cfg.program:
+        raise ConfigError("synth writes its program into the run directory; program= is for eval, retrain and "
+                          "show-program")
     if result.exists() and (out / "summary.json").exists() and not cfg.overwrite:
+        if cfg.baseline.comm == "program":
+            load_program(result, paths.synth_command(cfg))  # a corrupt result is an error, never "already done"
+        else:
+            baseline_comm(cfg)  # the same check for a tree
         log.info("already synthesized: %s (overwrite=true searches again)", result)
         return {"program": str(result)}
+    with run_lock(out):
+        return _synthesize_locked(cfg, info, out)
+
+
+def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))

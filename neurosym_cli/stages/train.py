@@ -19,6 +19,7 @@ from ..policy.comm import CommProvider
 from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, console, log, use_rich
 from ..utils.device import resolve_device
+from ..utils.lock import run_lock
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
 from .comm import baseline_comm
@@ -72,6 +73,12 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
     spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,
                    detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every)
     out = paths.train_dir(cfg)
+    with run_lock(out):
+        return _train_locked(cfg, info, env, comm, init, verb, spec, device, out)
+
+
+def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: Callable[[], CommTransformer],
+                  verb: str, spec: FitSpec, device: torch.device, out) -> dict:
     ckpt = out / "model.pt"
     state = None
     if ckpt.exists() and not cfg.overwrite:

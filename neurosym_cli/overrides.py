@@ -1,0 +1,78 @@
+"""Command-line overrides checked before Hydra sees them (stdlib only): a typo in a key or a value of the wrong
+type is one line naming the closest key or the expected type, instead of Hydra's multi-line message that suggests
+``+key=value`` (which would then be accepted and ignored)."""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import re
+
+from .config import TASK_SCHEMAS, BaselineConfig, BudgetConfig, ModelConfig, OptimConfig, RunConfig, SynthConfig
+
+_SCHEMAS = {"model": ModelConfig, "optim": OptimConfig, "budget": BudgetConfig, "baseline": BaselineConfig,
+            "synth": SynthConfig}
+_SECTIONS = tuple(_SCHEMAS)
+_GROUPS = ("task", "baseline", "budget")  # config groups: key=<option name>
+_FUNCS = ("range(", "choice(", "glob(", "interval(", "shuffle(", "sort(", "tag(", "str(", "int(", "float(", "bool(")
+_INT = re.compile(r"[+-]?[0-9][0-9_]*")
+_BOOL = {"true", "false", "yes", "no", "on", "off", "1", "0"}
+
+
+def _fields(cls) -> dict[str, str]:
+    return {f.name: str(f.type) for f in dataclasses.fields(cls)}
+
+
+def known_keys() -> dict[str, str]:
+    """Every key an override may set, dotted, with its declared type (as written in config.py)."""
+    top = _fields(RunConfig)
+    keys = {k: t for k, t in top.items() if k not in _SECTIONS + ("task",)}
+    keys.update({g: "group" for g in _GROUPS})
+    for section in _SECTIONS:
+        keys.update({f"{section}.{k}": t for k, t in _fields(_SCHEMAS[section]).items()})
+    for schema in TASK_SCHEMAS.values():
+        keys.update({f"task.{k}": t for k, t in _fields(schema).items()})
+    return keys
+
+
+def _type_error(value: str, kind: str) -> str | None:
+    """Why ``value`` cannot be a ``kind`` (int, float, bool), or None when it can (or cannot be judged here)."""
+    if value.startswith(("${", "[", "{", "'", '"')) or value.startswith(_FUNCS) or value == "null":
+        return None
+    for part in value.split(","):  # a sweep: seed=0,1,2
+        part = part.strip()
+        if kind == "int" and not _INT.fullmatch(part):
+            return "an integer"
+        if kind == "float":
+            try:
+                float(part.replace("_", ""))
+            except ValueError:
+                return "a number"
+        if kind == "bool" and part.lower() not in _BOOL:
+            return "true or false"
+    return None
+
+
+def check(args: list[str]) -> str | None:
+    """A one-line error for the first bad override in ``args`` (flags and Hydra's own keys are skipped), else None."""
+    keys = known_keys()
+    for a in args:
+        if a.startswith("-") or "=" not in a and not a.startswith("~"):
+            continue
+        key, _, value = a.partition("=")
+        key = key.lstrip("+~")
+        if key.startswith("hydra") or "/" in key or "@" in key:
+            continue
+        if not all(ch.isascii() for ch in value) and not value.startswith(("'", '"')):
+            return (f"{a}: Hydra reads non-ASCII characters only in quotes; write it as \"{key}='{value}'\" "
+                    f"(the double quotes are for the shell)")
+        if key not in keys:
+            near = difflib.get_close_matches(key, list(keys), n=1, cutoff=0.6)
+            hint = f"; did you mean {near[0]!r}?" if near else "; `neurosym <command> --cfg job` lists the keys"
+            return f"unknown key {key!r}{hint}"
+        kind = keys[key].replace("Optional[", "").rstrip("]")
+        if kind in ("int", "float", "bool"):
+            why = _type_error(value, kind)
+            if why:
+                return f"{a}: {key} takes {why}, not {value!r}"
+    return None

@@ -1,0 +1,45 @@
+"""One writer per run directory: an advisory lock (flock) on <dir>/.lock, held while a command writes there.
+
+A second command that would write the same directory (the same model trained twice, or with other settings)
+stops at once with one line naming the process that holds it, instead of overwriting its model, history and
+manifest. The lock dies with its process (kill -9 included), so a crashed run never leaves a stale lock.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+from .io import ArtifactError
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not on Linux or macOS: no locking, as before
+    fcntl = None  # type: ignore[assignment]
+
+
+@contextmanager
+def run_lock(directory: Path) -> Iterator[None]:
+    """Hold ``directory``'s lock for the duration of the block (ArtifactError when another process holds it)."""
+    directory = Path(directory)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        fd = os.open(directory / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError as e:
+        raise ArtifactError(f"cannot write to {directory}: {e.strerror or e}") from None
+    try:
+        if fcntl is not None:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 512, 0).decode(errors="replace").strip() or "another process"
+                raise ArtifactError(f"{directory} is being written by {holder}; wait for it to finish (a rerun "
+                                    f"then resumes or reuses its result), or write elsewhere with runs_root=...") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()} ({' '.join(sys.argv)[:200]})".encode(), 0)
+        yield
+    finally:
+        os.close(fd)  # closing releases the lock

@@ -1,0 +1,364 @@
+"""Faults and hostile input: every bad input is one line and a non-zero exit, and no result is lost silently.
+
+Probes by class (docs/reliability.md lists the promises and what tests each): program text (size, depth,
+encoding, numbers, a directory, mutations), every artifact truncated, emptied, of the wrong type or a directory,
+concurrent writers, signals, read-only and impossible run directories, overrides (typos, types, quoting, ranges),
+and file modes. Fast cases run in CI; benchmarks/fuzz_parser.py is the longer fuzz run.
+"""
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, neurosym_cmd
+from neurosym_cli.config import ConfigError
+from neurosym_cli.dsl import ProgramSyntaxError, parse, to_text
+from neurosym_cli.dsl.files import load_program
+from neurosym_cli.utils.io import ArtifactError, read_json, write_text
+from neurosym_cli.utils.lock import run_lock
+
+
+def run(args, runs, check=True, timeout=300, **kw):
+    env = {**os.environ, "NEUROSYM_RUNS": str(runs)}
+    p = subprocess.run([*neurosym_cmd(), *args], cwd=runs, env=env, capture_output=True, text=True, timeout=timeout,
+                       **kw)
+    if check and p.returncode != 0:
+        raise AssertionError(f"exit {p.returncode}\nstdout:\n{p.stdout}\nstderr:\n{p.stderr}")
+    return p
+
+
+def one_line_error(p, needle: str) -> None:
+    """A non-zero exit, no traceback, and the reason in the last line of stderr."""
+    assert p.returncode != 0, p.stdout
+    assert "Traceback" not in p.stderr and "Error executing job" not in p.stderr, p.stderr
+    assert needle in p.stderr.strip().splitlines()[-1], p.stderr
+
+
+# ------------------------------------------------------------------------------------------ program text
+GOOD = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41 and gd <= 2.0, l))\n"
+
+
+@pytest.mark.parametrize("text,needle", [
+    ("random(filter(d >= 1e400, l))", "out of range"),
+    ("random(filter(d >= -1e999, l))", "out of range"),
+    ("argmax(map(1e400*d, filter(true, l)))", "out of range"),
+    ("random(filter(d >= \u0661\u0662, l))", "unexpected character"),  # Arabic-Indic digits are not numbers
+    ("random(filter(" + "(" * 200 + "d >= 1" + ")" * 200 + ", l))", "nested deeper"),
+    ("random(filter(" + " and ".join(["d >= 1"] * 500) + ", l))", "nested deeper"),
+    ("random(filter(" + " or ".join(["d >= 1"] * 500) + ", l))", "nested deeper"),
+    ("random(filter(d >= 1, l))" + "x" * 20_000, "characters long"),
+    ("random(filter(" + "d" * 5_000 + " >= 1, l))", "unknown"),
+])
+def test_hostile_program_text_is_a_syntax_error(text, needle):
+    try:
+        parse(text)
+    except ProgramSyntaxError as e:
+        assert e.line >= 1 and e.col >= 1
+        assert len(str(e)) < 300  # a huge token is quoted in part, never whole
+        if needle != "unknown":
+            assert needle in str(e)
+    else:  # a 5,000-letter feature name parses; the task check refuses it (test below)
+        assert needle == "unknown"
+
+
+def test_parser_is_linear_in_the_line_length():
+    """An 11 MB line is refused at once (before tokenizing); a rule of 1,200 terms parses."""
+    t0 = time.perf_counter()
+    with pytest.raises(ProgramSyntaxError, match="characters long"):
+        parse("random(filter(" + "d >= 1 and " * 1_000_000)
+    assert time.perf_counter() - t0 < 5
+    long_rule = "argmax(map(" + " + ".join(f"w{k}" for k in range(1200)) + ", filter(true, l)))"
+    assert len(long_rule) < 10_000 and len(parse(long_rule).rounds[0][0].score.terms) == 1200
+
+
+def test_program_files_that_are_not_text(tmp_path):
+    (tmp_path / "latin1.txt").write_bytes("random(filter(d >= 1, l))  # caf\xe9\n".encode("latin-1"))
+    with pytest.raises(ArtifactError, match="not UTF-8 text"):
+        load_program(tmp_path / "latin1.txt")
+    with pytest.raises(ArtifactError, match="is not a file"):
+        load_program(tmp_path)
+    with pytest.raises(ArtifactError, match="no program at"):
+        load_program(tmp_path / "missing.txt")
+    (tmp_path / "empty.txt").write_text("")
+    with pytest.raises(ArtifactError, match="at least one rule"):
+        load_program(tmp_path / "empty.txt", "neurosym synth ...")
+
+
+def _mutate(text: str, rng: random.Random) -> str:
+    alphabet = "()=<>,.-+*#:0123456789 \n\tabcdefghijklmnopqrstuvwxyz_\u00e9\u0661\x00"
+    chars = list(text)
+    for _ in range(rng.randint(1, 6)):
+        op = rng.random()
+        k = rng.randrange(len(chars) + 1)
+        if op < 0.4 and chars:
+            del chars[min(k, len(chars) - 1)]
+        elif op < 0.8:
+            chars.insert(k, rng.choice(alphabet))
+        else:
+            chars[k:k] = chars[rng.randrange(len(chars)):][: rng.randint(1, 30)]  # duplicate a slice
+    return "".join(chars)
+
+
+def fuzz_parser(cases: int, seed: int) -> tuple[int, int]:
+    """Mutations of a valid program: each parses to a program that prints and parses back the same, or raises
+    ProgramSyntaxError; anything else fails. Returns (parsed, rejected)."""
+    rng = random.Random(seed)
+    parsed = rejected = 0
+    for _ in range(cases):
+        text = _mutate(GOOD, rng)
+        try:
+            p = parse(text)
+        except ProgramSyntaxError:
+            rejected += 1
+            continue
+        assert parse(to_text(p)) == p, text
+        parsed += 1
+    return parsed, rejected
+
+
+def test_parser_mutations_parse_back_or_are_syntax_errors():
+    parsed, rejected = fuzz_parser(3_000, seed=0)
+    assert parsed > 30 and rejected > 1_000  # both outcomes are exercised
+
+
+@pytest.mark.slow
+def test_parser_fuzz_long():
+    parsed, rejected = fuzz_parser(60_000, seed=1)
+    assert parsed + rejected == 60_000
+
+
+# ------------------------------------------------------------------------------------------ artifacts
+@pytest.mark.parametrize("content", [b"", b"{", b"[1, 2]", b'{"label": 3}', b"\xff\xfe", None])
+def test_malformed_metrics_are_one_line(tmp_path, content):
+    from neurosym_cli.stages.results import aggregate, collect
+
+    f = tmp_path / "eval" / "tf-full" / "metrics.json"
+    if content is None:
+        f.mkdir(parents=True)  # a directory where the file should be
+    else:
+        f.parent.mkdir(parents=True)
+        f.write_bytes(content)
+    with pytest.raises(ArtifactError):
+        collect(tmp_path)
+    with pytest.raises(ArtifactError):
+        aggregate(tmp_path)
+
+
+def test_read_json_maps_every_failure_to_one_error(tmp_path):
+    for content in (b"", b"\xff", b"{]"):
+        (tmp_path / "x.json").write_bytes(content)
+        with pytest.raises(ArtifactError, match="cannot read"):
+            read_json(tmp_path / "x.json")
+    with pytest.raises(ArtifactError):
+        read_json(tmp_path)
+
+
+@pytest.mark.parametrize("content", [b"", b"not a checkpoint", b"PK\x03\x04" + b"\x00" * 100, None])
+def test_corrupt_torch_files_are_artifact_errors(tmp_path, content):
+    from neurosym_cli.artifacts import load_checkpoint
+
+    f = tmp_path / "model.pt"
+    if content is None:
+        f.mkdir()
+    else:
+        f.write_bytes(content)
+    with pytest.raises(ArtifactError, match="model.pt"):
+        load_checkpoint(f, "neurosym train ...")
+
+
+def test_a_pickle_with_code_is_refused(tmp_path):
+    """Checkpoints load with weights_only=True: a pickle that would run code on load is a corrupt file."""
+    import pickle
+
+    from neurosym_cli.artifacts import load_checkpoint
+
+    class Boom:
+        def __reduce__(self):
+            return (os.system, ("echo pwned > " + str(tmp_path / "pwned"),))
+
+    f = tmp_path / "model.pt"
+    f.write_bytes(pickle.dumps({"format": "neurosym-policy/1", "x": Boom()}))
+    with pytest.raises(ArtifactError, match="corrupt"):
+        load_checkpoint(f, "neurosym train ...")
+    assert not (tmp_path / "pwned").exists()
+
+
+def test_writes_follow_the_umask(tmp_path):
+    write_text(tmp_path / "a.txt", "x")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+def test_writing_under_a_file_is_an_artifact_error(tmp_path):
+    (tmp_path / "f").write_text("")
+    with pytest.raises(ArtifactError, match="cannot write"):
+        write_text(tmp_path / "f" / "x.json", "{}")
+
+
+# ------------------------------------------------------------------------------------------ concurrency
+def test_run_directory_has_one_writer(tmp_path):
+    with run_lock(tmp_path / "run"):
+        with pytest.raises(ArtifactError, match="is being written by pid"):
+            with run_lock(tmp_path / "run"):
+                pass
+    with run_lock(tmp_path / "run"):  # released: the next writer gets it
+        pass
+
+
+def test_second_train_on_the_same_directory_stops_and_the_first_is_kept(tmp_path):
+    """While a process holds a run directory, `neurosym train` there (same or other settings) stops at once."""
+    run(["train", "budget=tiny"], tmp_path)
+    oracle = tmp_path / "random-cross/tiny/seed0/train/oracle"
+    before = (oracle / "model.pt").read_bytes()
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom neurosym_cli.utils.lock import run_lock\n"
+                               f"with run_lock({str(oracle)!r}):\n    print('held', flush=True)\n    time.sleep(60)"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        p = run(["train", "budget=tiny", "overwrite=true", "optim.lr=0.5"], tmp_path, check=False)
+        one_line_error(p, "is being written by pid")
+    finally:
+        holder.kill()
+        holder.wait()
+    assert (oracle / "model.pt").read_bytes() == before
+
+
+def test_hand_written_program_never_overwrites_the_synthesized_one(tmp_path):
+    run(["train", "task=random-grid", "budget=tiny"], tmp_path)
+    run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
+    run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path)
+    exp = tmp_path / "random-grid/tiny/seed0"
+    synthesized = (exp / "eval/prog-k2-lam0.5-v1/metrics.json").read_text()
+    mine = tmp_path / "mine.txt"
+    mine.write_text("random(filter(true, l))\nrandom(filter(true, l))\n")
+    run(["eval", "task=random-grid", "baseline=prog", "budget=tiny", f"program={mine}"], tmp_path)
+    assert (exp / "eval/prog-k2-lam0.5-v1/metrics.json").read_text() == synthesized
+    mine_dirs = [p.name for p in (exp / "eval").glob("prog-file-mine-*")]
+    assert len(mine_dirs) == 1 and mine_dirs[0].endswith("-v1")
+    # another text under the same name is another result
+    mine.write_text("argmax(map(-1.0*d, filter(true, l)))\n")
+    run(["eval", "task=random-grid", "baseline=prog", "budget=tiny", f"program={mine}"], tmp_path)
+    assert len(list((exp / "eval").glob("prog-file-mine-*"))) == 2
+    # a feature this task does not have, a directory, and synth with program= are one line each
+    mine.write_text("random(filter(g7x >= 1.0, l))\n")
+    one_line_error(run(["eval", "task=random-grid", "baseline=prog", "budget=tiny", f"program={mine}"], tmp_path,
+                       check=False), "not in task random-grid")
+    one_line_error(run(["retrain", "task=random-grid", "budget=tiny", f"program={mine}"], tmp_path, check=False),
+                   "not in task random-grid")
+    one_line_error(run(["eval", "task=random-grid", "baseline=prog", "budget=tiny", f"program={tmp_path}"], tmp_path,
+                       check=False), "is not a file")
+    one_line_error(run(["synth", "task=random-grid", "budget=tiny", f"program={mine}"], tmp_path, check=False),
+                   "program= is for eval")
+    # a corrupt synthesized program is an error that says how to make it again, never "already synthesized"
+    (exp / "synth/k2-lam0.5-v1/program.txt").write_text("random(filter(d >=, l))\n")
+    p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path, check=False)
+    one_line_error(p, "overwrite=true")
+    one_line_error(run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path, check=False),
+                   "overwrite=true")
+    (exp / "synth/k2-lam0.5-v1/summary.json").write_text('{"rounds": 7, "lam": "x"}')
+    (exp / "synth/k2-lam0.5-v1/program.txt").write_text(GOOD.replace("theta", "dy").replace("gd", "gx"))
+    p = run(["show-program", "task=random-grid", "budget=tiny"], tmp_path)  # a summary of another shape: no terms
+    assert "argmax(map(" in p.stdout
+    (exp / "eval/tf-full").mkdir(parents=True, exist_ok=True)
+    (exp / "eval/tf-full/metrics.json").write_text('{"label": "tf-full"}')
+    one_line_error(run(["report", "task=random-grid", "budget=tiny"], tmp_path, check=False),
+                   "not an evaluation written by")
+
+
+# ------------------------------------------------------------------------------------------ signals
+def _wait_for(pred, timeout=120.0) -> bool:
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if pred():
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def test_ctrl_c_at_start_up_and_mid_run(tmp_path):
+    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path)}
+    # while torch imports (its library is being mapped into the process): one line, exit 130
+    p = subprocess.Popen([*neurosym_cmd(), "train", "budget=tiny"], cwd=tmp_path, env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    maps = Path(f"/proc/{p.pid}/maps")
+    if _wait_for(lambda: maps.exists() and "libtorch" in maps.read_text()) and p.poll() is None:
+        p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=120)
+    if p.returncode != 0:  # 0: it finished before the signal arrived (nothing to check)
+        assert p.returncode == 130, (p.returncode, err)
+        assert "Traceback" not in err and "interrupted" in err.strip().splitlines()[-1], err
+    # mid-run: stop after the first checkpoint, then the same command resumes
+    args = ["train", "budget=tiny", "budget.train_rollouts=400", "budget.horizon=20", "overwrite=true"]
+    p = subprocess.Popen([*neurosym_cmd(), *args], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    history = tmp_path / "random-cross/tiny/seed0/train/oracle/history.csv"
+    _wait_for(lambda: history.exists() and len(history.read_text().splitlines()) > 2)
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=120)
+    if p.returncode == 130:
+        assert "re-run the same command to resume" in err and "Traceback" not in err
+        again = run(args[:-1], tmp_path)
+        assert "resuming" in again.stdout + again.stderr
+
+
+# ------------------------------------------------------------------------------------------ run directories
+def test_runs_root_that_cannot_hold_runs(tmp_path):
+    (tmp_path / "file").write_text("")
+    one_line_error(run(["train", f"runs_root={tmp_path / 'file' / 'runs'}"], tmp_path, check=False), "is a file")
+    one_line_error(run(["report", f"runs_root={tmp_path / 'file'}"], tmp_path, check=False), "is a file")
+
+
+def test_read_only_runs_directory(tmp_path, monkeypatch):
+    """An archived, read-only runs directory: read-only commands log to the temp directory, writing ones stop
+    with one line (root ignores permissions, so the check is driven through os.access)."""
+    from neurosym_cli import cli
+
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode: False if str(p).startswith(str(tmp_path)) else real(p, mode))
+    args, err = cli._log_dir("show-program", [f"runs_root={tmp_path}"])
+    assert err is None and any(a.startswith("hydra.run.dir=") and "neurosym-logs" in a for a in args)
+    args, err = cli._log_dir("train", [f"runs_root={tmp_path}"])
+    assert err is not None and "read-only" in err
+
+
+# ------------------------------------------------------------------------------------------ overrides
+@pytest.mark.parametrize("arg,needle", [
+    ("seeed=1", "did you mean 'seed'"), ("lamda=0.3", "did you mean 'lam'"), ("+foo=1", "unknown key 'foo'"),
+    ("task.colision_weight=3", "did you mean 'task.collision_weight'"), ("seed=abc", "takes an integer"),
+    ("lam=0.3,abc", "takes a number"), ("overwrite=maybe", "takes true or false"),
+    ("runs_root=\u00e9t\u00e9", "only in quotes"),
+])
+def test_bad_overrides_are_named(arg, needle):
+    from neurosym_cli.overrides import check
+
+    assert needle in (check(["-m", arg]) or "")
+
+
+@pytest.mark.parametrize("arg,needle", [("seeed=1", "did you mean 'seed'"), ("seed=abc", "takes an integer"),
+                                        ("rules=1000", "at most 40 - 1"), ("threads=999", "CPU")])
+def test_bad_overrides_are_one_line(tmp_path, arg, needle):
+    one_line_error(run(["train", arg], tmp_path, check=False), needle)
+
+
+def test_good_overrides_pass_the_check():
+    from neurosym_cli.overrides import check
+
+    assert check(["seed=0,1,2", "lam=0.3,0.5", "budget.horizon=null", "task.num_groups=2", "hydra/launcher=joblib",
+                  "hydra.launcher.n_jobs=2", "baselines=[tf-full,prog]", "seed=range(0,3)", "-m", "--cfg", "job",
+                  "runs_root='\u00e9t\u00e9'", "synth.backend=torch", "+seed=3"]) is None
+
+
+def test_rules_and_threads_ranges_in_the_schema():
+    from neurosym_cli.commands.apps import compose_config
+
+    with pytest.raises(ConfigError, match="rules=30"):
+        compose_config("train", ["task=random-grid", "rules=30"])
+    assert compose_config("train", ["task=random-grid", "rules=29"]).rules == 29
