@@ -111,6 +111,17 @@ def _runs_root(args: list[str]) -> str:
     return os.environ.get("NEUROSYM_RUNS", "outputs")
 
 
+def _writable(directory) -> bool:
+    """Whether a directory can be written, by trying (os.access says yes to root even on a read-only mount)."""
+    import tempfile
+
+    try:
+        os.rmdir(tempfile.mkdtemp(dir=directory, prefix=".neurosym-probe-"))
+        return True
+    except OSError:
+        return False
+
+
 def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     """Where the runs root cannot hold Hydra's log directory: one line for a command that writes there, and for a
     read-only command its logs moved to the temp directory. Returns (args, error)."""
@@ -122,7 +133,7 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
         probe = probe.parent
     if not probe.is_dir():
         return args, f"runs_root {root} lies under {probe}, which is a file, not a directory"
-    if os.access(probe, os.W_OK | os.X_OK):
+    if _writable(probe):
         return args, None
     if cmd not in READ_ONLY:
         return args, (f"cannot write to the runs directory {probe} (read-only); point runs_root=... (or "

@@ -318,11 +318,10 @@ def test_runs_root_that_cannot_hold_runs(tmp_path):
 
 def test_read_only_runs_directory(tmp_path, monkeypatch):
     """An archived, read-only runs directory: read-only commands log to the temp directory, writing ones stop
-    with one line (root ignores permissions, so the check is driven through os.access)."""
+    with one line (root writes anywhere, so the check is driven through cli._writable)."""
     from neurosym_cli import cli
 
-    real = os.access
-    monkeypatch.setattr(os, "access", lambda p, mode: False if str(p).startswith(str(tmp_path)) else real(p, mode))
+    monkeypatch.setattr(cli, "_writable", lambda p: not str(p).startswith(str(tmp_path)))
     args, err = cli._log_dir("show-program", [f"runs_root={tmp_path}"])
     assert err is None and any(a.startswith("hydra.run.dir=") and "neurosym-logs" in a for a in args)
     args, err = cli._log_dir("train", [f"runs_root={tmp_path}"])
@@ -362,3 +361,45 @@ def test_rules_and_threads_ranges_in_the_schema():
     with pytest.raises(ConfigError, match="rules=30"):
         compose_config("train", ["task=random-grid", "rules=30"])
     assert compose_config("train", ["task=random-grid", "rules=29"]).rules == 29
+
+
+def test_unwritable_system_path_is_one_line(tmp_path):
+    one_line_error(run(["train", "runs_root=/proc/neurosym"], tmp_path, check=False), "cannot write")
+
+
+def test_other_corrupt_artifacts(tmp_path):
+    """A corrupt tree is one line naming overwrite=true; a corrupt dataset is collected again; a corrupt
+    training history counts as no time."""
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.stages.comm import baseline_comm
+    from neurosym_cli.stages.pipeline import _trained_seconds
+
+    cfg = compose_config("eval", ["baseline=dt", "budget=tiny", f"runs_root={tmp_path}"])
+    tree = tmp_path / "random-cross/tiny/seed0/synth/dt-k5-v1/tree.json"
+    tree.parent.mkdir(parents=True)
+    for content in ('{"rounds": [{"left": 1}]}', '{"rounds": 3}', "[]"):
+        tree.write_text(content)
+        with pytest.raises(ArtifactError, match="overwrite=true"):
+            baseline_comm(cfg)
+    (tmp_path / "history.csv").write_text("step,loss\n1,2\n")  # no seconds column
+    assert _trained_seconds(tmp_path / "history.csv") == 0.0
+
+
+def test_corrupt_dataset_is_collected_again(tmp_path):
+    import torch
+
+    from neurosym_cli.config import CrossConfig, ModelConfig
+    from neurosym_cli.envs import make_env
+    from neurosym_cli.policy import CommTransformer
+    from neurosym_cli.synth.dataset import load_or_collect
+
+    env = make_env(CrossConfig(name="c", horizon=4))
+    pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
+    path = tmp_path / "dataset.pt"
+    path.write_bytes(b"\x80\x04garbage")
+    data = load_or_collect(path, "neurosym synth", env, pol, 2, 2, torch.Generator().manual_seed(0),
+                           torch.device("cpu"))
+    assert data and sum(b.states for b in data) == 2 * 2  # 2 rollouts, every 2nd of 4 steps
+    again = load_or_collect(path, "neurosym synth", env, pol, 2, 2, torch.Generator().manual_seed(5),
+                            torch.device("cpu"))
+    assert torch.equal(again[0].target, data[0].target)  # reused, not collected with the other generator

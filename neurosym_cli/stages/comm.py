@@ -4,7 +4,7 @@ against the task."""
 from __future__ import annotations
 
 from .. import paths
-from ..config import ConfigError, RunConfig
+from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
 from ..envs.features import feature_names
 from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm
@@ -39,8 +39,8 @@ def baseline_comm(cfg: RunConfig) -> CommProvider:
             raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
         try:
             rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
-        except (KeyError, TypeError, ValueError, IndexError) as e:
-            raise ArtifactError(f"corrupt tree {path} ({type(e).__name__}); `{paths.synth_command(cfg)} "
+        except (UserError, KeyError, TypeError, ValueError, IndexError) as e:
+            raise ArtifactError(f"corrupt tree {path} ({e}); `{paths.synth_command(cfg)} "
                                 f"overwrite=true` fits it again") from None
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")

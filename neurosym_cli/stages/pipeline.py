@@ -32,11 +32,12 @@ def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage) -> tuple[RunConfig
 
 
 def _trained_seconds(history: Path) -> float:
-    """Sum of the per-step wall times in a training history (0 when there is none)."""
-    if not history.exists():
+    """Sum of the per-step wall times in a training history (0 when there is none or it is unreadable)."""
+    try:
+        with open(history, newline="") as f:
+            return sum(float(row["seconds"]) for row in csv.DictReader(f))
+    except (OSError, KeyError, ValueError, TypeError):  # none yet, or not ours: the stage's own clock stands
         return 0.0
-    with open(history, newline="") as f:
-        return sum(float(row["seconds"]) for row in csv.DictReader(f))
 
 
 def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
