@@ -280,6 +280,10 @@ class SynthConfig:
     """samples of every random rule used to estimate the expected objective (common random numbers)"""
     max_depth: int = 2
     """filter depth: 1 = single tests, 2 = and/or of two tests"""
+    own_scores: bool = True
+    """argmax scores may read the asking agent's own state (as the reference's search): such a score ties every
+    candidate, so the pick falls to agent index order; false keeps scores to features of the other agent
+    (docs/fidelity.md, 'Synthesis', has the measurement)"""
     backend: str = "auto"
     """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""

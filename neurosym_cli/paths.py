@@ -40,8 +40,20 @@ def model_name(cfg: RunConfig) -> str:
 
 
 def _objective_suffix(cfg: RunConfig) -> str:
-    """'-hinge' for programs searched with a non-paper objective; trees have no objective."""
-    return "" if cfg.synth.objective == "paper" or cfg.baseline.comm == "tree" else f"-{cfg.synth.objective}"
+    """What sets a program's search apart from the default, in its name: '-hinge' for the reference's objective,
+    '-otherscores' for scores kept to the other agent's features (trees have neither)."""
+    if cfg.baseline.comm == "tree":
+        return ""
+    return ("" if cfg.synth.objective == "paper" else f"-{cfg.synth.objective}") + (
+        "" if cfg.synth.own_scores else "-otherscores")
+
+
+def _search_overrides(cfg: RunConfig) -> str:
+    """The overrides that reproduce the search of ``_objective_suffix``."""
+    if cfg.baseline.comm == "tree":
+        return ""
+    return ("" if cfg.synth.objective == "paper" else f" synth.objective={cfg.synth.objective}") + (
+        "" if cfg.synth.own_scores else " synth.own_scores=false")
 
 
 def program_tag(cfg: RunConfig) -> str:
@@ -108,7 +120,7 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
 def retrain_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
     det = " baseline=dt-retrained" if cfg.baseline.comm == "tree" else det
-    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) else ""
+    obj = _search_overrides(cfg)
     prog = f" program={cfg.program}" if cfg.program and cfg.baseline.comm == "program" else ""
     return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}{prog}")
@@ -117,6 +129,6 @@ def retrain_command(cfg: RunConfig) -> str:
 def synth_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog" if cfg.baseline.det else ""
     det = " baseline=dt" if cfg.baseline.comm == "tree" else det
-    obj = f" synth.objective={cfg.synth.objective}" if _objective_suffix(cfg) else ""
+    obj = _search_overrides(cfg)
     return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")

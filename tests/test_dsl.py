@@ -8,8 +8,7 @@ from hypothesis import strategies as st
 from neurosym_cli.dsl import And, ArgMaxRule, Linear, Or, Program, ProgramSyntaxError, RandomRule, TrueCond
 from neurosym_cli.dsl import Test as T
 from neurosym_cli.dsl import describe, parse, to_text
-from neurosym_cli.dsl.ast import cond_features
-from neurosym_cli.dsl.printer import _NAMES
+from neurosym_cli.dsl.vocabulary import agent_level, feature_names, words
 from neurosym_cli.dsl.interpret import program_mask, rule_picks
 
 
@@ -125,10 +124,10 @@ def test_parse_print_round_trip(p):
     for rules in p.rounds:
         for r in rules:
             reading = describe(r)
-            # a reading names the rule's kind and every feature its filter tests (by name or by its word)
-            assert reading.startswith("ask a random agent" if isinstance(r, RandomRule) else "ask the"), reading
-            for name in cond_features(r.cond):
-                assert name in reading or _NAMES.get(name, name) in reading, (name, reading)
+            # a reading says whom the rule asks, after its guard when it has one
+            who = "ask a random agent" if isinstance(r, RandomRule) else "ask the"
+            assert reading.startswith(who) or (reading.startswith("while ") and who in reading), reading
+    assert to_text(p) == text  # reading a program never changes its text
 
 
 def test_paper_examples_read_as_written():
@@ -137,6 +136,7 @@ def test_paper_examples_read_as_written():
     assert to_text(p) == text
     assert p.rounds[0][0] == ArgMaxRule(Linear((("d", -1.0),)), T(Linear((("theta", 1.0),)), -1.85))
     assert describe(p.rounds[0][0]) == "ask the nearest agent whose bearing (rad) is at least -1.85"
+    assert describe(p.rounds[0][1]) == "ask a random agent at least 3.41 away"
     assert parse("random(filter(d <= 2.5, l))").rounds[0][0].cond == T(Linear((("d", -1.0),)), -2.5)
 
 
@@ -161,3 +161,51 @@ def test_parser_reports_line_and_column(text, line, col):
         parse(text)
     assert (e.value.line, e.value.col) == (line, col), str(e.value)
     assert f":{line}:{col}:" in str(e.value)
+
+
+FAMILIES = [("formation", 0), ("unlabeled", 10)]
+
+
+@pytest.mark.parametrize("kind,goals", FAMILIES)
+@pytest.mark.parametrize("version", ["v1", "v2"])
+def test_every_feature_reads_with_its_subject(kind, goals, version):
+    """A test on the asking agent's own state is a guard ('while my ...'); one on the other agent selects
+    ('ask a random agent whose ... / within / for which ... its ...'). A score on the agent's own state ties every
+    candidate, and the reading says so."""
+    for name in feature_names(kind, goals, version):
+        test = describe(parse(f"random(filter({name} >= 1.5, l))").rounds[0][0])
+        score = describe(parse(f"argmax(map({name}, filter(true, l)))").rounds[0][0])
+        if agent_level(name):
+            assert test == f"while {words(name)} is at least 1.5, ask a random agent; otherwise ask nobody"
+            assert words(name).startswith("my ")
+            assert score.startswith("ask the lowest-index agent (the score, ") and "agent order" in score
+        else:
+            assert test.startswith("ask a random agent ") and "while" not in test, test
+            assert any(w in test for w in ("whose ", " its ", " away")) and "lowest-index" not in score, (test, score)
+
+
+@pytest.mark.parametrize("text,reading", [
+    ("random(filter(gd >= 7.46, l))",
+     "while my distance to my goal is at least 7.46, ask a random agent; otherwise ask nobody"),
+    ("random(filter(gy >= 0.04, l))",
+     "while my y-offset to my goal is at least 0.04, ask a random agent; otherwise ask nobody"),
+    ("random(filter(d <= 2.06 and gd >= 7.46, l))",
+     "while my distance to my goal is at least 7.46, ask a random agent within 2.06; otherwise ask nobody"),
+    ("random(filter(gy >= 0.58 or d >= 7.78, l))",
+     "ask a random agent (any agent if my y-offset to my goal is at least 0.58, otherwise only those at least "
+     "7.78 away)"),
+    ("argmax(map(gd, filter(dy >= 2.37 and d <= 1.14, l)))",
+     "ask the lowest-index agent whose y-offset is at least 2.37 and within 1.14 (the score, my distance to my "
+     "goal, is the same for every candidate, so argmax falls to agent order)"),
+    ("argmax(map(-1.0*theta, filter(theta >= 1.22 and gd <= 12.85, l)))",
+     "while my distance to my goal is at most 12.85, ask the agent with the smallest bearing (rad) whose bearing "
+     "(rad) is at least 1.22; otherwise ask nobody"),
+    ("argmax(map(-1.0*d, filter(d >= 1.29 or theta <= -0.34, l)))",
+     "ask the nearest agent for which its distance is at least 1.29 or its bearing (rad) is at most -0.34"),
+    ("random(filter(g3d >= 2.0, l))",
+     "while my distance to my goal 3 (by initial distance) is at least 2, ask a random agent; otherwise ask nobody"),
+])
+def test_hand_written_readings(text, reading):
+    p = parse(text)
+    assert describe(p.rounds[0][0]) == reading
+    assert to_text(p) == text + "\n"

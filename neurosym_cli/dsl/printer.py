@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import math
 
-from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond
+from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond, cond_features
+from .vocabulary import agent_level, words
 
 
 def fmt_float(x: float) -> str:
@@ -73,46 +74,116 @@ def to_text(p: Program) -> str:
 
 
 # ----------------------------------------------------------------------------------- plain language
-_NAMES = {
-    "d": "distance", "theta": "bearing (rad)", "dx": "x-offset", "dy": "y-offset",
-    "gd": "own distance to goal", "gtheta": "bearing to own goal (rad)", "gx": "x-offset to own goal",
-    "gy": "y-offset to own goal",
-    "px": "own x-position", "py": "own y-position", "pd": "own distance from the origin",
-}
+# A filter's clauses are of two kinds (vocabulary.agent_level): those on the asking agent's own state are the
+# same for every candidate, so they decide whether the agent asks anybody at all (a guard: "while my distance to
+# my goal is at least 7.46, ..."); those on the other agent select among the candidates ("... within 2.06").
+# A score that reads only the agent's own state ties every candidate, and argmax then takes the lowest index.
 
 
-def _lin_words(f: Linear) -> str:
-    if len(f.terms) == 1:
-        name, w = f.terms[0]
-        word = _NAMES.get(name, name)
-        return word if w == 1.0 else f"{fmt_float(w)} x {word}"
-    return linear_text(f)
+def _own(c: Cond) -> bool | None:
+    """True if every feature of c describes the asking agent, False if every one the other agent, None if mixed
+    (TrueCond counts as the asking agent's)."""
+    names = cond_features(c)
+    if all(agent_level(n) for n in names):
+        return True
+    if not any(agent_level(n) for n in names):
+        return False
+    return None
+
+
+def _num(x: float) -> str:
+    return f"{x:.4g}"  # thresholds of the search sit on a 0.01 grid: 7.46, 12.85, -2.78
+
+
+def _test_words(t: Test) -> str:
+    """'my distance to my goal is at least 7.46', 'its distance is at most 2.06' (a test alone)."""
+    if len(t.lhs.terms) == 1:
+        name, w = t.lhs.terms[0]
+        subject = words(name) if agent_level(name) or "_" in name else f"its {words(name)}"  # "_": "... x its ..."
+        if w == 1.0:
+            return f"{subject} is at least {_num(t.threshold)}"
+        if w == -1.0:
+            return f"{subject} is at most {_num(-t.threshold)}"
+        return f"{fmt_float(w)} x {subject} is at least {_num(t.threshold)}"
+    return f"{linear_text(t.lhs)} is at least {_num(t.threshold)}"
 
 
 def _cond_words(c: Cond) -> str:
+    """Any condition, each clause with its subject ('my ...', 'its ...'); and binds tighter than or."""
     if isinstance(c, TrueCond):
-        return ""
+        return "always"
     if isinstance(c, Test):
-        if len(c.lhs.terms) == 1 and c.lhs.terms[0][1] == -1.0:
-            return f"{_NAMES.get(c.lhs.terms[0][0], c.lhs.terms[0][0])} is at most {-c.threshold:.3g}"
-        return f"{_lin_words(c.lhs)} is at least {c.threshold:.3g}"
+        return _test_words(c)
     op = " and " if isinstance(c, And) else " or "
-    parts = [w for w in (_cond_words(c.left), _cond_words(c.right)) if w]
-    if len(parts) < 2:
-        return parts[0] if parts else ""
-    return "(" + op.join(parts) + ")"
+    return "(" + _cond_words(c.left) + op + _cond_words(c.right) + ")"
+
+
+def _bare(c: Cond) -> str:
+    """_cond_words without the outer parentheses."""
+    text = _cond_words(c)
+    return text[1:-1] if isinstance(c, (And, Or)) else text
+
+
+def _selection(c: Cond) -> str:
+    """A clause on the other agent, as a phrase after 'agent': 'within 2.06', 'whose bearing (rad) is ...'."""
+    if isinstance(c, Test) and len(c.lhs.terms) == 1:
+        name, w = c.lhs.terms[0]
+        if name == "d" and w == -1.0:
+            return f"within {_num(-c.threshold)}"
+        if name == "d" and w == 1.0:
+            return f"at least {_num(c.threshold)} away"
+        text = _test_words(c)
+        return "whose " + text[len("its "):] if text.startswith("its ") else f"for which {text}"
+    return f"for which {_bare(c)}"
+
+
+def _conjuncts(c: Cond) -> list[Cond]:
+    if isinstance(c, And):
+        return _conjuncts(c.left) + _conjuncts(c.right)
+    return [] if isinstance(c, TrueCond) else [c]
+
+
+def _pick(r: Rule) -> tuple[str, str]:
+    """(who is asked, a note on a score that ties every candidate)."""
+    if isinstance(r, RandomRule):
+        return "a random agent", ""
+    terms = r.score.terms
+    if all(agent_level(n) for n, _ in terms):
+        what = words(terms[0][0]) if len(terms) == 1 else linear_text(r.score)
+        return "the lowest-index agent", (f" (the score, {what}, is the same for every candidate, so argmax falls to "
+                                          f"agent order)")
+    if len(terms) == 1:
+        name, w = terms[0]
+        if name == "d":
+            return f"the {'nearest' if w < 0 else 'farthest'} agent", ""
+        subject = words(name)
+        return f"the agent with the {'smallest' if w < 0 else 'largest'} {subject}", ""
+    return f"the agent maximising {linear_text(r.score)}", ""
 
 
 def describe(r: Rule) -> str:
-    """One plain-language line, e.g. 'ask the nearest agent whose bearing (rad) is at least -1.85'."""
-    where = _cond_words(r.cond)
-    whose = f" whose {where}" if where else ""
-    if isinstance(r, RandomRule):
-        return f"ask a random agent{whose}"
-    if len(r.score.terms) == 1:
-        name, w = r.score.terms[0]
-        if name == "d":
-            return f"ask the {'nearest' if w < 0 else 'farthest'} agent{whose}"
-        word = _NAMES.get(name, name)
-        return f"ask the agent with the {'smallest' if w < 0 else 'largest'} {word}{whose}"
-    return f"ask the agent maximising {linear_text(r.score)}{whose}"
+    """One plain-language line that separates the rule's guard (clauses on the asking agent's own state) from its
+    selection (clauses and score on the other agent), e.g. 'while my distance to my goal is at least 7.46, ask a
+    random agent within 2.06; otherwise ask nobody'."""
+    pick, note = _pick(r)
+    guards, selections, options = [], [], []
+    for c in _conjuncts(r.cond):
+        own = _own(c)
+        if own:
+            guards.append(_bare(c))
+        elif own is False:
+            selections.append(_selection(c))
+        elif isinstance(c, Or) and _own(c.left) is not None and _own(c.right) is not None:
+            mine, other = (c.left, c.right) if _own(c.left) else (c.right, c.left)
+            if _own(mine) and _own(other) is False:
+                options.append(f"any agent if {_bare(mine)}, otherwise only those "
+                               f"{_selection(other)}")
+            else:
+                selections.append(_selection(c))
+        else:
+            selections.append(_selection(c))
+    body = f"ask {pick}" + (" " + " and ".join(selections) if selections else "")
+    body += "".join(f" ({o})" for o in options) + note
+    if guards:
+        return f"while {' and '.join(guards)}, {body}; otherwise ask nobody"
+    return body

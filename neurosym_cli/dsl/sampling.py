@@ -11,6 +11,7 @@ import random
 from dataclasses import dataclass, replace
 
 from .ast import And, ArgMaxRule, Cond, Linear, Or, RandomRule, Rule, Test, TrueCond
+from .vocabulary import agent_level
 
 MOVES = ("threshold", "feature", "sign", "shape", "kind", "rule")
 _MOVE_WEIGHTS = (0.35, 0.15, 0.1, 0.15, 0.1, 0.15)
@@ -24,10 +25,16 @@ class SearchSpace:
     rules: int  # K
     max_depth: int = 2
     det: bool = False  # argmax rules only (det-prog)
+    own_scores: bool = True  # argmax scores may read the asking agent's own state (they tie every candidate)
 
     @property
     def features(self) -> list[str]:
         return sorted(self.quantiles)
+
+    @property
+    def score_features(self) -> list[str]:
+        """Features an argmax score may read: all, or (own_scores=False) those that vary with the candidate."""
+        return [f for f in self.features if self.own_scores or not agent_level(f)]
 
     def spread(self, name: str) -> float:
         q = self.quantiles[name]
@@ -56,7 +63,7 @@ def random_cond(space: SearchSpace, rng: random.Random) -> Cond:
 
 
 def random_score(space: SearchSpace, rng: random.Random) -> Linear:
-    return Linear(((rng.choice(space.features), rng.choice((1.0, -1.0))),))
+    return Linear(((rng.choice(space.score_features), rng.choice((1.0, -1.0))),))
 
 
 def random_rule(space: SearchSpace, rng: random.Random) -> Rule:

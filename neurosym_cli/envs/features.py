@@ -14,23 +14,17 @@ from torch import Tensor
 
 from ..config import ConfigError
 
-VERSIONS = ("v1", "v2")
-
-
-def _vec_names(prefix: str) -> list[str]:
-    if not prefix:  # the observation o_ij
-        return ["dx", "dy", "d", "theta"]
-    return [f"{prefix}x", f"{prefix}y", f"{prefix}d", f"{prefix}theta"]
+from ..dsl.vocabulary import VERSIONS, agent_level, feature_names, state_prefixes  # noqa: F401  (re-exported)
 
 
 def agent_vectors(kind: str, agent: Tensor) -> tuple[list[str], Tensor]:
     """(prefixes, (B, N, V, 2)) the 2-D vectors of each agent's state, from its policy input."""
     b, n, ds = agent.shape
     if kind == "formation":
-        return ["g"], (-agent).reshape(b, n, 1, 2)  # input is x - g; the goal vector is g - x
+        return state_prefixes(kind, 0), (-agent).reshape(b, n, 1, 2)  # input is x - g; the goal vector is g - x
     g = (ds - 2) // 2
     vecs = torch.cat([agent[..., :2].reshape(b, n, 1, 2), (-agent[..., 2:]).reshape(b, n, g, 2)], 2)
-    return ["p"] + [f"g{k}" for k in range(1, g + 1)], vecs
+    return state_prefixes(kind, g), vecs
 
 
 class PairFeatures:
@@ -48,11 +42,7 @@ class PairFeatures:
         self.names = self._names()
 
     def _names(self) -> list[str]:
-        names = [nm for p in self.prefixes for nm in _vec_names(p)] + _vec_names("")
-        if self.version == "v2":
-            f = self.prefixes[0]
-            names += [f"{f}x_dx", f"{f}x_dy", f"{f}y_dx", f"{f}y_dy"]
-        return names
+        return feature_names(self.kind, len(self.prefixes) - 1, self.version)
 
     def __getitem__(self, name: str) -> Tensor:
         if name not in self._cache:
@@ -65,8 +55,8 @@ class PairFeatures:
         import numpy as np
 
         b, n = self.batch, self.n_agents
-        pair = [nm for nm in self.names if nm in _vec_names("") or "_" in nm]  # of o_ij: (B, N, N)
-        agent = [nm for nm in self.names if nm not in pair]
+        pair = [nm for nm in self.names if not agent_level(nm)]  # of o_ij: (B, N, N)
+        agent = [nm for nm in self.names if agent_level(nm)]
         fp = torch.stack([self[nm].expand(b, n, n).reshape(-1) for nm in pair]).float().contiguous()
         fa = (torch.stack([self[nm].reshape(-1) for nm in agent]).float().contiguous() if agent
               else torch.zeros(0, b * n))
@@ -96,9 +86,3 @@ class PairFeatures:
                        "theta": lambda: torch.atan2(v[..., 1], v[..., 0])}[part]()
                 return val.unsqueeze(-1)  # (B, N, 1): agent i's own feature, the same for every j
         raise KeyError(name)
-
-
-def feature_names(kind: str, n_goals: int, version: str) -> list[str]:
-    """Names of a task's features without building tensors (for proposals and messages)."""
-    ds = 2 if kind == "formation" else 2 + 2 * n_goals
-    return PairFeatures(kind, torch.zeros(1, 2, ds), torch.zeros(1, 2, 2, 2), version).names

@@ -11,21 +11,34 @@ from rich.table import Table
 
 from .. import paths
 from ..config import RunConfig
-from ..dsl.ast import Program
+from ..dsl.ast import Program, rule_features
+from ..dsl.vocabulary import agent_level
 from ..dsl.printer import describe, rule_text
 from ..utils.console import console
 from ..dsl.files import load_program
 
 
+def _features(rule) -> str:
+    """The rule's features, the asking agent's own (my) and the other agent's (its), styled apart."""
+    names = sorted(rule_features(rule))
+    mine = [n for n in names if agent_level(n)]
+    its = [n for n in names if not agent_level(n)]
+    parts = ([f"[cyan]my[/] {', '.join(mine)}"] if mine else []) + ([f"[magenta]its[/] {', '.join(its)}"] if its else [])
+    return "; ".join(parts) or "none"
+
+
 def render(program: Program, rounds: list[dict] | None, lam: float | None, title: str = "program") -> None:
     """Print each rule in the paper's notation beside its reading, and the objective terms when known."""
     for r, rules in enumerate(program.rounds):
-        t = Table(show_header=True, header_style="bold", expand=False)
+        t = Table(show_header=True, header_style="bold", expand=False,
+                  caption="[cyan]my[/]: the asking agent's own state, the same for every candidate (a guard, or a "
+                          "score that ties); [magenta]its[/]: the other agent as the asking agent observes it")
         t.add_column("#", justify="right")
         t.add_column("rule (paper notation)")
+        t.add_column("features read")
         t.add_column("reading")
         for k, rule in enumerate(rules, start=1):
-            t.add_row(str(k), rule_text(rule), describe(rule))
+            t.add_row(str(k), rule_text(rule), _features(rule), describe(rule))
         info = rounds[r] if rounds and r < len(rounds) else None
         sub = ""
         if isinstance(info, dict) and lam is not None:

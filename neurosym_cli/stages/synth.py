@@ -63,7 +63,7 @@ def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
 def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
                    out: Path) -> dict:
     spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
-                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det)
+                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det, cfg.synth.own_scores)
     results, trace, rounds = [], [], []
     rich = use_rich(cfg.progress, info.multirun)
     tag = paths.program_tag(cfg)

@@ -41,12 +41,13 @@ class RoundSpec:
     rules: int
     max_depth: int
     det: bool
+    own_scores: bool = True
 
 
 def search_round(scorer: CachedScorer, spec: RoundSpec, seed: str, gen: torch.Generator,
                  on_step: Callable | None = None) -> SearchResult:
     """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw."""
-    space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det)
+    space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det, spec.own_scores)
     rng = random.Random(seed)
     return metropolis(
         init=lambda: random_rules(space, rng),
