@@ -34,6 +34,10 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
+
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
 TEMPLATE = DOCS / "results.template.md"
@@ -222,9 +226,14 @@ def section(name: str, v: dict) -> str:
                    f"{ms(v, b, 'mean_degree')} |")
     if name == task and (DOCS / "figures" / f"{task}.png").exists():
         out += ["", f"![{task}: loss vs max degree](figures/{task}.png)"]
-    out += ["", "Synthesized programs (`neurosym show-program` prints them with a plain-language reading):", ""]
+    out += ["", "Synthesized programs, each rule with its reading (`neurosym show-program` prints the same):", ""]
     for tag, text in sorted(v["programs"].items()):
         out += [f"`{tag}`:", "", "```", text, "```", ""]
+        program = parse(text)
+        for r, rules in enumerate(program.rounds, start=1):
+            head = f"round {r}, " if program.n_rounds > 1 else ""
+            out += [f"- {head}rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
+        out.append("")
     if "timings" in v:
         t = v["timings"]
         total = sum(t.values())
