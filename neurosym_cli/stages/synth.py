@@ -31,11 +31,11 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.baseline.comm not in ("program", "tree"):
         raise ConfigError(f"synth makes programs (baseline=prog, det-prog) or trees (baseline=dt), "
                           f"not {cfg.baseline.name}")
-    out = paths.synth_dir(cfg)
-    result = out / ("tree.json" if cfg.baseline.comm == "tree" else "program.txt")
     if cfg.program:
         raise ConfigError("synth writes its program into the run directory; program= is for eval, retrain and "
                           "show-program")
+    out = paths.synth_dir(cfg)
+    result = out / ("tree.json" if cfg.baseline.comm == "tree" else "program.txt")
     if result.exists() and (out / "summary.json").exists() and not cfg.overwrite:
         if cfg.baseline.comm == "program":
             load_program(result, paths.synth_command(cfg))  # a corrupt result is an error, never "already done"
