@@ -155,7 +155,7 @@ class UnlabeledConfig(TaskConfig):
 
 
 TASK_SCHEMAS: dict[str, type[TaskConfig]] = {"cross": CrossConfig, "grid": GridConfig, "unlabeled": UnlabeledConfig}
-"""schema of each task family; a task YAML names its family in its defaults list (``/task_schema/cross@_here_``)"""
+"""schema of each task family; a task YAML names its family in its defaults list (``/cross_task_schema@_here_``)"""
 
 
 @dataclass

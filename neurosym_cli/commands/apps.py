@@ -19,7 +19,7 @@ from . import COMMANDS
 _store = ConfigStore.instance()
 _store.store(name="run_schema", node=RunConfig)
 for _family, _schema in TASK_SCHEMAS.items():  # what a conf/task/*.yaml extends
-    _store.store(group="task_schema", name=_family, node=_schema)
+    _store.store(name=f"{_family}_task_schema", node=_schema)  # no group: not a choice of its own in --help
 for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
     _store.store(group="baseline", name=_b.name, node=_b)
 
