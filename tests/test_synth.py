@@ -275,3 +275,25 @@ def test_scorer_beyond_127_agents(backend):
     space = _space(sc, 3)
     rng = random.Random(0)
     _walk_matches_full_forward(sc, space, rng, (far,) + random_rules(space, rng)[1:])
+
+
+@pytest.mark.parametrize("kind,goals,version", [("formation", 0, "v1"), ("formation", 0, "v2"), ("unlabeled", 10, "v1")])
+def test_every_rule_the_search_proposes_compiles_for_the_kernels(kind, goals, version):
+    """The kernels' rule specification is derived from the AST (kernels.rule_spec); every rule the search can
+    propose (initial rules and neighbours of every move, with and without own-state scores) compiles to it, so
+    the compiled back-end never silently falls back to torch in a search."""
+    from neurosym_cli.dsl.vocabulary import agent_level, feature_names
+    from neurosym_cli.synth import kernels
+
+    names = feature_names(kind, goals, version)
+    pair, agent = [n for n in names if not agent_level(n)], [n for n in names if agent_level(n)]
+    rng = random.Random(0)
+    for own_scores in (True, False):
+        space = SearchSpace({n: (-1.0, 0.0, 1.0) for n in names}, rules=3, own_scores=own_scores)
+        rules = random_rules(space, rng)
+        for _ in range(400):
+            rules, _move = propose(rules, space, rng)
+            for r in rules:
+                assert kernels.rule_spec(r, pair, agent) is not None, r
+                if not own_scores and isinstance(r, ArgMaxRule):
+                    assert not all(agent_level(n) for n, _ in r.score.terms), r
