@@ -127,6 +127,9 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     read-only command its logs moved to the temp directory. Returns (args, error)."""
     from pathlib import Path
 
+    if any(a in ("--help", "-h", "--hydra-help", "--cfg", "-c", "--info", "-i", "--version") or a.startswith("-sc")
+           for a in args):
+        return args, None  # Hydra answers these without a run directory
     root = Path(_runs_root(args)).expanduser().absolute()
     probe = root
     while not probe.exists() and probe != probe.parent:
