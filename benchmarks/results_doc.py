@@ -69,8 +69,9 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
             m = json.loads(f.read_text())
             c = m["config"]
             if c["baseline"]["comm"] == "program":
-                if c["lam"] != (c["task"]["lam"] if lam is None else lam) or c["synth"]["objective"] != objective:
-                    continue
+                if (c["lam"] != (c["task"]["lam"] if lam is None else lam) or c["synth"]["objective"] != objective
+                        or not c["synth"].get("own_scores", True) or c.get("program")):
+                    continue  # another variant's programs, or a hand-written one
                 out["lam"], out["rules"], out["features"] = c["lam"], c["rules"], c["features"]
             out["baselines"][m["baseline"]] = {
                 "label": m["label"],
