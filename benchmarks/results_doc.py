@@ -79,8 +79,8 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
                 "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]},
             }
             out["seeds"] = m["seeds"]
-        if not out["baselines"]:
-            print(f"no evaluations for {name} under {exp}; skipped", file=sys.stderr)
+        if "lam" not in out:
+            print(f"no program evaluations for {name} under {exp}; skipped", file=sys.stderr)
             continue
         suffix = f"-lam{out['lam']:g}-{out['features']}" + ("" if objective == "paper" else f"-{objective}")
         for p in sorted(exp.glob("synth/*/program.txt")):
