@@ -6,7 +6,6 @@ concurrent writers, signals, read-only and impossible run directories, overrides
 and file modes. Fast cases run in CI; benchmarks/fuzz_parser.py is the longer fuzz run.
 """
 
-import json
 import os
 import random
 import signal
@@ -17,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, neurosym_cmd
+from conftest import neurosym_cmd
 from neurosym_cli.config import ConfigError
 from neurosym_cli.dsl import ProgramSyntaxError, parse, to_text
 from neurosym_cli.dsl.files import load_program
