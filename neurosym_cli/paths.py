@@ -39,41 +39,40 @@ def model_name(cfg: RunConfig) -> str:
     return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
 
 
-def _objective_suffix(cfg: RunConfig) -> str:
-    """What sets a program's search apart from the default, in its name: '-hinge' for the reference's objective,
-    '-otherscores' for scores kept to the other agent's features (trees have neither)."""
+def _search_variants(cfg: RunConfig) -> list[tuple[str, str]]:
+    """(name suffix, override) for each way a program's search differs from the default: the reference's hinge
+    objective, scores kept to the other agent's features. Trees have neither."""
     if cfg.baseline.comm == "tree":
-        return ""
-    return ("" if cfg.synth.objective == "paper" else f"-{cfg.synth.objective}") + (
-        "" if cfg.synth.own_scores else "-otherscores")
+        return []
+    out = []
+    if cfg.synth.objective != "paper":
+        out.append((f"-{cfg.synth.objective}", f" synth.objective={cfg.synth.objective}"))
+    if not cfg.synth.own_scores:
+        out.append(("-otherscores", " synth.own_scores=false"))
+    return out
 
 
-def _search_overrides(cfg: RunConfig) -> str:
-    """The overrides that reproduce the search of ``_objective_suffix``."""
-    if cfg.baseline.comm == "tree":
-        return ""
-    return ("" if cfg.synth.objective == "paper" else f" synth.objective={cfg.synth.objective}") + (
-        "" if cfg.synth.own_scores else " synth.own_scores=false")
+def _search_tag(cfg: RunConfig) -> str:
+    """K, lambda, feature map and search variant of a synthesized program (or a hand-written program's tag)."""
+    if cfg.program:
+        return user_program_tag(cfg)  # type: ignore[return-value]
+    return f"k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}" + "".join(suffix for suffix, _ in _search_variants(cfg))
 
 
 def program_tag(cfg: RunConfig) -> str:
-    """Name of one synthesis result: K, lambda, feature map, det- for argmax-only programs, and the objective
-    when it is not the paper's (dt: K, features)."""
+    """Name of one synthesis result: det- for argmax-only programs, K, lambda, feature map, and how the search
+    differs from the default (dt: K, features); a hand-written program is named by file and content."""
     if cfg.baseline.comm == "tree":
         return f"dt-k{cfg.rules}-{cfg.features}"
-    if cfg.baseline.comm == "program" and cfg.program:
-        return user_program_tag(cfg)  # type: ignore[return-value]
-    return f"{'det-' if cfg.baseline.det else ''}k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
+    return ("det-" if cfg.baseline.det and not cfg.program else "") + _search_tag(cfg)
 
 
 def baseline_label(cfg: RunConfig) -> str:
     """Name of a baseline's evaluation directory (k, and the program's tag, where they matter)."""
     if cfg.baseline.comm in ("full", "none"):
         return cfg.baseline.name
-    if cfg.baseline.comm == "program" and cfg.program:
-        return f"{cfg.baseline.name}-{user_program_tag(cfg)}"
     if cfg.baseline.comm == "program":
-        return f"{cfg.baseline.name}-k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}{_objective_suffix(cfg)}"
+        return f"{cfg.baseline.name}-{_search_tag(cfg)}"
     if cfg.baseline.comm == "tree":
         return f"{cfg.baseline.name}-k{cfg.rules}-{cfg.features}"
     return f"{cfg.baseline.name}-k{cfg.rules}"
@@ -120,7 +119,7 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
 def retrain_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog-retrained" if cfg.baseline.det else ""
     det = " baseline=dt-retrained" if cfg.baseline.comm == "tree" else det
-    obj = _search_overrides(cfg)
+    obj = "".join(override for _, override in _search_variants(cfg))
     prog = f" program={cfg.program}" if cfg.program and cfg.baseline.comm == "program" else ""
     return (f"neurosym retrain task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}{prog}")
@@ -129,6 +128,6 @@ def retrain_command(cfg: RunConfig) -> str:
 def synth_command(cfg: RunConfig) -> str:
     det = " baseline=det-prog" if cfg.baseline.det else ""
     det = " baseline=dt" if cfg.baseline.comm == "tree" else det
-    obj = _search_overrides(cfg)
+    obj = "".join(override for _, override in _search_variants(cfg))
     return (f"neurosym synth task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
             f" budget={cfg.budget.name} seed={cfg.seed}{det}{obj}")
