@@ -5,7 +5,9 @@ Imports nothing heavy, so `neurosym --help` answers in milliseconds (torch is im
 
 from __future__ import annotations
 
+import logging
 import os
+import re
 import sys
 
 from neurosym_cli.commands import COMMANDS
@@ -100,6 +102,65 @@ def check_choices(args: list[str]) -> str | None:
     return None
 
 
+LAUNCHER_PLUGINS = {
+    "joblib": ("hydra_plugins.hydra_joblib_launcher", "hydra-joblib-launcher (a dependency of neurosym; reinstall it)"),
+    "submitit_local": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
+    "submitit_slurm": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
+    "slurm": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
+    "slurm_local": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
+}
+"""hydra/launcher choices -> (the plugin module they need, how to install it)"""
+
+_MODES = {"-m": "--multirun", "--multirun": "--multirun", "--cfg": "--cfg", "-c": "--cfg", "--info": "--info",
+          "-i": "--info", "--run": "--run", "-r": "--run"}
+
+
+def check_launcher(args: list[str]) -> str | None:
+    """A one-line error for a launcher whose plugin is not installed (Hydra only says "Could not find"), or for
+    two of Hydra's exclusive modes at once (-m with --cfg), else None."""
+    from importlib.util import find_spec
+
+    modes = sorted({_MODES[a] for a in args if a in _MODES})
+    if len(modes) > 1:
+        return f"{' and '.join(modes)} cannot be combined; use one (print the config of a sweep job without -m)"
+    for a in args:
+        key, sep, value = a.partition("=")
+        if sep and key.lstrip("+") == "hydra/launcher" and value in LAUNCHER_PLUGINS:
+            module, how = LAUNCHER_PLUGINS[value]
+            try:
+                found = find_spec(module) is not None
+            except (ImportError, ValueError):
+                found = False
+            if not found:
+                return f"hydra/launcher={value} needs {how}"
+    return None
+
+
+def swept_keys(args: list[str]) -> list[str]:
+    """The keys a sweep varies (`seed=0,1`, `lam=range(...)`): a comma outside brackets and quotes, or a sweep
+    function. Multirun jobs prefix their lines with these keys' values (passed in NEUROSYM_SWEPT)."""
+    keys = []
+    for a in args:
+        key, sep, value = a.partition("=")
+        if not sep or a.startswith("-"):
+            continue
+        depth, quote, comma = 0, "", False
+        for ch in value:
+            if quote:
+                quote = "" if ch == quote else quote
+            elif ch in "'\"":
+                quote = ch
+            elif ch in "[{(":
+                depth += 1
+            elif ch in "]})":
+                depth -= 1
+            elif ch == "," and depth == 0:
+                comma = True
+        if comma or value.startswith(("range(", "choice(", "glob(", "interval(")):
+            keys.append(key.lstrip("+~"))
+    return keys
+
+
 READ_ONLY = ("show-program", "report")
 """commands that only read a runs directory: they run on an archived (read-only) one, logging elsewhere"""
 
@@ -164,6 +225,19 @@ def _complete() -> bool:
     return False
 
 
+class QuietLauncherDump(logging.Filter):
+    """Shortens the joblib launcher's first line, a dump of every joblib argument, to what a user chose."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        msg = str(record.msg)
+        if msg.startswith("Joblib.Parallel("):
+            n_jobs = re.search(r"n_jobs=(-?\d+)", msg % record.args if record.args else msg)
+            jobs = re.search(r"is launching (\d+) jobs", msg % record.args if record.args else msg)
+            record.msg, record.args = (f"joblib: launching {jobs.group(1) if jobs else 'the'} jobs, "
+                                       f"n_jobs={n_jobs.group(1) if n_jobs else '?'} at a time"), None
+        return True
+
+
 def main() -> None:
     try:
         _main()
@@ -194,7 +268,7 @@ def _main() -> None:
         raise SystemExit(2)
     from neurosym_cli.overrides import check
 
-    bad = check_choices(rest) or check(rest)
+    bad = check_choices(rest) or check_launcher(rest) or check(rest)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
@@ -202,7 +276,13 @@ def _main() -> None:
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
+    if any(a in ("--cfg", "-c") and rest[i + 1:i + 2] == ["job"] for i, a in enumerate(rest)) \
+            and "--resolve" not in rest:
+        rest = [*rest, "--resolve"]  # print `rules: 5`, not `rules: ${task.rules}`: the values the run would use
+    if any(a in ("-m", "--multirun") for a in rest):
+        os.environ["NEUROSYM_SWEPT"] = ",".join(swept_keys(rest))  # read by each job (commands/_run.py)
     sys.argv = [f"neurosym {cmd}", *hoist_flags(rest)]
+    logging.getLogger("hydra_plugins.hydra_joblib_launcher._core").addFilter(QuietLauncherDump())
     from neurosym_cli.commands import apps
 
     apps.APPS[COMMANDS[cmd][0]]()

@@ -98,7 +98,7 @@ def test_multirun_two_seeds(tmp_path):
         assert (tmp_path / f"two-groups-cross/tiny/seed{s}/train/oracle/model.pt").exists()
     a = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
     b = json.loads((tmp_path / "two-groups-cross/tiny/seed1/train/oracle/manifest.json").read_text())
-    assert a["final_loss_last5"] != b["final_loss_last5"]
+    assert a["final_loss"] != b["final_loss"]
 
 
 def test_joblib_launcher_sweep(tmp_path):

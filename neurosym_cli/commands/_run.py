@@ -38,6 +38,16 @@ def _plain_logs_off_terminal() -> None:
             root.addHandler(plain)
 
 
+def job_prefix(overrides: list[str], num: int) -> str:
+    """What tells this sweep job from the others: the values of the swept keys (NEUROSYM_SWEPT, set by the
+    console script), else the job's number."""
+    import os
+
+    swept = [k for k in os.environ.get("NEUROSYM_SWEPT", "").split(",") if k]
+    picked = [o for o in overrides if o.partition("=")[0].lstrip("+~") in swept]
+    return " ".join(picked) if picked else f"job {num}"
+
+
 def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
     """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback."""
     try:
@@ -48,6 +58,10 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
         _error(name, str(e).splitlines()[0])
     _plain_logs_off_terminal()
     hc = HydraConfig.get()
+    if hc.mode == RunMode.MULTIRUN:  # parallel jobs' lines interleave: each names its own overrides
+        from ..utils.console import set_job_prefix
+
+        set_job_prefix(job_prefix(list(hc.overrides.task), hc.job.num))
     info = RunInfo(OmegaConf.to_container(cfg, resolve=True), hc.mode == RunMode.MULTIRUN,  # type: ignore[arg-type]
                    hc.runtime.output_dir)
     if typed.threads:

@@ -15,6 +15,15 @@ from .vocabulary import agent_level
 
 MOVES = ("threshold", "feature", "sign", "shape", "kind", "rule")
 _MOVE_WEIGHTS = (0.35, 0.15, 0.1, 0.15, 0.1, 0.15)
+MOVE_HELP = {
+    "threshold": "nudge one filter threshold",
+    "feature": "swap the feature of a filter test or argmax score",
+    "sign": "flip a test's side (f >= c to -f >= -c) or a score's sign",
+    "shape": "add, drop or and/or-toggle a filter clause",
+    "kind": "turn random into argmax or back",
+    "rule": "replace one rule by a fresh random one",
+}
+"""what each MCMC move changes, for the live view and `neurosym synth --help`"""
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from pathlib import Path
 from .. import paths
 from ..baselines import get
 from ..config import RunConfig
-from ..utils.console import console, log
+from ..utils.console import log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
@@ -61,6 +61,6 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         timings[stage.name] = round(took if stage.verb == "eval" else max(took, timings.get(stage.name, 0.0)), 1)
         write_json(timing_file, timings)
     print_table(cfg)
-    console.print(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
-                  f"seed {cfg.seed})")
+    say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
+        f"seed {cfg.seed})")
     return results

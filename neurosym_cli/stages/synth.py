@@ -10,11 +10,12 @@ import torch
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
 from ..dsl.printer import to_text
+from ..dsl.sampling import MOVE_HELP
 from ..envs import make_env
 from ..synth.dataset import DataBucket, load_or_collect
 from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
-from ..utils.console import SearchDisplay, console, log, use_rich
+from ..utils.console import SearchDisplay, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..dsl.files import load_program, save_program
@@ -73,9 +74,10 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                               cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
                               backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
-        with SearchDisplay(label, spec.steps, cfg.lam, rich) as disp:
+        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP) as disp:
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
                                disp.update)
+        disp.summary(res)
         full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
         results.append(res)
         trace += [{"round": r + 1, **row} for row in res.trace]
@@ -99,7 +101,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
         "config": info.config,
     })
-    console.print(f"[green]synthesized[/] {out / 'program.txt'}")
+    say(f"[green]synthesized[/] {out / 'program.txt'}")
     if not info.multirun:
         render(program, rounds, cfg.lam)
     return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds)}
@@ -135,5 +137,5 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out
     write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
                                       "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
                                       "config": info.config})
-    console.print(f"[green]fitted[/] {out / 'tree.json'}")
+    say(f"[green]fitted[/] {out / 'tree.json'}")
     return {"tree": str(out / "tree.json")}

@@ -17,7 +17,7 @@ from ..envs import make_env
 from ..policy import CommTransformer, make_comm
 from ..policy.comm import CommProvider
 from ..training import FitSpec, FitState, fit
-from ..utils.console import ProgressReporter, console, log, use_rich
+from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
@@ -111,15 +111,17 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, rep, save, state)
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
-    last = state.history[-5:]
+    last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
     final = sum(h["loss"] for h in last) / len(last)
     artifacts.write_json(out / "manifest.json", {
         "command": verb, "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
-        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss_last5": final,
+        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
+        "final_loss_steps": len(last),
         "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
         "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
         "hydra_dir": info.log_dir, "config": info.config,
     })
-    console.print(f"[green]done[/] {label}: loss {final:.3f} (mean of the last {len(last)} steps), "
-                  f"{rollouts} rollouts in {seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
+    averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
+    say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "
+        f"{seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
     return {"checkpoint": str(ckpt), "steps": state.step, "loss": final}

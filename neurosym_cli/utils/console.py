@@ -9,12 +9,40 @@ from typing import Mapping, Sequence
 import rich
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
+from rich.text import Text
 
 console = rich.get_console()  # shared with Hydra's RichHandler, so log lines print cleanly above a live bar
 if not console.is_terminal:
     # pipes and CI: no 80-column wrapping of log lines (rich's default width without a terminal)
     rich.reconfigure(width=200)
 log = logging.getLogger("neurosym")
+
+_job = {"prefix": ""}
+
+
+def set_job_prefix(prefix: str) -> None:
+    """Inside a multirun, every log line and final line of this job starts with ``[prefix]`` (its overrides), so
+    the lines of parallel jobs can be told apart."""
+    _job["prefix"] = prefix
+    if prefix:
+        for h in logging.getLogger().handlers:
+            if not any(isinstance(f, _JobPrefix) for f in h.filters):
+                h.addFilter(_JobPrefix())
+
+
+class _JobPrefix(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        if _job["prefix"] and not getattr(record, "_job_prefixed", False):
+            record.msg = f"[{_job['prefix'].replace('%', '%%')}] {record.msg}"
+            record._job_prefixed = True  # one record can pass several handlers
+        return True
+
+
+def say(text: str) -> None:
+    """A final line of a stage (done, synthesized, ...): on the console, with the job's prefix in a multirun."""
+    from rich.markup import escape
+
+    console.print(f"[dim]{escape('[' + _job['prefix'] + ']')}[/] {text}" if _job["prefix"] else text)
 
 
 def use_rich(mode: str, multirun: bool) -> bool:
@@ -34,12 +62,14 @@ class ProgressReporter:
         self.progress: Progress | None = None
         self.task = None
         self.t0 = time.perf_counter()
+        self.first_step: int | None = None
 
     def __enter__(self) -> "ProgressReporter":
         if self.rich:
             self.progress = Progress(
-                TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                TextColumn("{task.fields[info]}"), TimeElapsedColumn(), TimeRemainingColumn(), console=console,
+                TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TextColumn("steps"),
+                TextColumn("{task.fields[info]}"), TextColumn("elapsed"), TimeElapsedColumn(), TextColumn("left"),
+                TimeRemainingColumn(), console=console,
             )
             self.progress.start()
         return self
@@ -50,12 +80,22 @@ class ProgressReporter:
 
     def update(self, step: int, total: int, metrics: Mapping[str, float]) -> None:
         info = "  ".join(f"{k} {_fmt(v)}" for k, v in metrics.items() if k in ("rollouts", "loss", "grad_norm"))
+        if self.first_step is None:
+            self.first_step = step - 1  # a resumed run: time left is measured from the steps of this run
         if self.progress is not None:
             if self.task is None:
                 self.task = self.progress.add_task(self.label, total=total, completed=step - 1, info="")
             self.progress.update(self.task, completed=step, info=info)
         elif step % self.log_every == 0 or step == total or step == 1:
-            log.info("%s step %d/%d  %s  (%.0f s)", self.label, step, total, info, time.perf_counter() - self.t0)
+            elapsed = time.perf_counter() - self.t0
+            log.info("%s step %d/%d  %s  (%s elapsed, %s left)", self.label, step, total, info, _clock(elapsed),
+                     _clock(elapsed / max(step - self.first_step, 1) * (total - step)))
+
+
+def _clock(seconds: float) -> str:
+    """Seconds as m:ss (or h:mm:ss)."""
+    s = int(round(seconds))
+    return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
 
 
 def _fmt(v: float) -> str:
@@ -78,18 +118,27 @@ def metrics_table(title: str, rows: Sequence[tuple[str, Mapping[str, Mapping[str
 
 
 class SearchDisplay:
-    """Live view of an MCMC search: step, best objective split into its terms, acceptance per move type,
-    proposals/s. A rich live table on a terminal; a plain line every ~10% of the steps otherwise."""
+    """Live view of an MCMC search: a bar with time left, then the best program's objective split into its terms,
+    acceptance per move type and proposals/s, in labelled columns; a closing summary line. A rich live view on a
+    terminal; a plain line every ~10% of the steps otherwise."""
 
-    def __init__(self, label: str, total: int, lam: float, rich: bool):
+    def __init__(self, label: str, total: int, lam: float, rich: bool, moves: Mapping[str, str] | None = None):
         self.label, self.total, self.lam, self.rich = label, total, lam, rich
+        self.moves = dict(moves or {})  # move name -> what it changes, explained under the table
         self.live = None
+        self.progress: Progress | None = None
+        self.task = None
         self.last = 0.0
+        self.t0 = time.perf_counter()
 
     def __enter__(self) -> "SearchDisplay":
         if self.rich:
             from rich.live import Live
 
+            self.progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                     TextColumn("steps ({task.fields[phase]})  elapsed"), TimeElapsedColumn(),
+                                     TextColumn("left"), TimeRemainingColumn(), console=console)
+            self.task = self.progress.add_task(self.label, total=self.total, phase="")
             self.live = Live(console=console, refresh_per_second=4, transient=False)
             self.live.start()
         return self
@@ -97,30 +146,47 @@ class SearchDisplay:
     def __exit__(self, *exc) -> None:
         if self.live is not None:
             self.live.stop()
+            if not console.is_terminal:  # forced rich into a file: end the last frame's line
+                console.line()
 
-    def _table(self, step: int, result, row) -> Table:
-        t = Table(title=f"{self.label}: step {step}/{self.total} ({row['phase']})", show_header=True,
-                  header_style="bold")
-        t.add_column("best objective")
-        t.add_column("= L1 action error")
-        t.add_column(f"+ {self.lam:g} x degree")
+    def _view(self, step: int, result, row):
+        from rich.console import Group
+
+        assert self.progress is not None
+        self.progress.update(self.task, completed=step, phase=row["phase"])
+        t = Table(show_header=True, header_style="bold", title="best program so far", title_justify="left")
+        t.add_column("objective", justify="right")
+        t.add_column("= L1 action error", justify="right")
+        t.add_column(f"+ {self.lam:g} x degree term", justify="right")
+        t.add_column("degree term (max in+out)", justify="right")
         t.add_column("proposals/s", justify="right")
         b = result.best_score
-        t.add_row(f"{b.total:.4f}", f"{b.l1:.4f}", f"{self.lam * b.degree:.4f} ({b.degree:.2f})",
+        t.add_row(f"{b.total:.4f}", f"{b.l1:.4f}", f"{self.lam * b.degree:.4f}", f"{b.degree:.3f}",
                   f"{result.proposals_per_second:.0f}")
         acc = "  ".join(f"{m} {100 * a:.0f}%" for m, a in result.acceptance().items())
-        t.caption = f"acceptance: {acc}"
-        return t
+        parts = [self.progress, t, Text(f"accepted proposals per move: {acc}")]
+        if self.moves:
+            parts.append(Text("moves: " + "; ".join(f"{m} = {d}" for m, d in self.moves.items()), style="dim"))
+        return Group(*parts)
 
     def update(self, step: int, result, row) -> None:
         now = time.perf_counter()
         if self.live is not None:
             if now - self.last > 0.25 or step == self.total:
-                self.live.update(self._table(step, result, row))
+                self.live.update(self._view(step, result, row))
                 self.last = now
         elif step == 1 or step == self.total or step % max(1, self.total // 10) == 0:
             b = result.best_score
             acc = " ".join(f"{m}={100 * a:.0f}%" for m, a in result.acceptance().items())
-            log.info("%s step %d/%d best %.4f = L1 %.4f + %g x degree %.3f | %.0f proposals/s | accept %s",
-                     self.label, step, self.total, b.total, b.l1, self.lam, b.degree,
-                     result.proposals_per_second, acc)
+            elapsed = now - self.t0
+            log.info("%s step %d/%d (%s elapsed, %s left)  best objective %.4f = L1 %.4f + %g x degree term %.3f"
+                     "  |  %.0f proposals/s  |  accepted per move: %s", self.label, step, self.total,
+                     _clock(elapsed), _clock(elapsed / step * (self.total - step)), b.total, b.l1, self.lam,
+                     b.degree, result.proposals_per_second, acc)
+
+    def summary(self, result) -> None:
+        """One closing line: the best objective, its terms, and the search's cost."""
+        b = result.best_score
+        say(f"[green]search done[/] {self.label}: best objective {b.total:.4f} = L1 {b.l1:.4f} + {self.lam:g} x "
+            f"degree term {b.degree:.3f}; {sum(result.proposed.values())} proposals in {_clock(result.seconds)} "
+            f"({result.proposals_per_second:.0f}/s)")
