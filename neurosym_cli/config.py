@@ -333,6 +333,9 @@ class RunConfig:
     """start over instead of resuming from an existing checkpoint"""
     progress: str = "auto"
     """auto (rich bar on a terminal, log lines otherwise), rich, plain"""
+    logger: str = "csv"
+    """run tracking: csv (history.csv, trace.csv: always written) or tensorboard (also event files under
+    <exp_dir>/tensorboard; the tensorboard extra)"""
     baselines: list[str] = field(default_factory=lambda: _registered_baselines())
     """pipeline: the baselines to make and evaluate, in order (default: every one of baselines.py, paper order)"""
     task: TaskConfig = field(default_factory=TaskConfig)
@@ -349,6 +352,7 @@ class RunConfig:
                f"device must be auto, cpu or cuda, got {self.device!r}")
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
+        _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
         cpus = os.cpu_count() or 1
         _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")
         n = getattr(self.task, "max_agents", None)  # the base schema (tests, defaults) has no team size

@@ -102,6 +102,11 @@ def dataset_file(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "synth" / f"dataset-r{cfg.budget.synth_rollouts}-s{cfg.synth.stride}.pt"
 
 
+def tensorboard_dir(cfg: RunConfig, run: str) -> Path:
+    """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
+    return Path(cfg.exp_dir) / "tensorboard" / run
+
+
 def eval_dir(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "eval" / baseline_label(cfg)
 

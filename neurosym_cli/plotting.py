@@ -1,4 +1,5 @@
-"""Figure-2-style plot: loss and max in/out-degree per baseline, mean ± std over seeds (paper section 4)."""
+"""Figures: the paper's Figure 2 (loss and max in/out-degree per baseline, mean ± std; section 4) and training
+curves. One colour per baseline in every figure (``color``)."""
 
 from __future__ import annotations
 
@@ -6,8 +7,18 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 
+def baseline_of(label: str) -> str:
+    """The baseline an evaluation label belongs to (``prog-retrained-k2-lam0.5-v1`` -> ``prog-retrained``)."""
+    from .baselines import BASELINES
+
+    names = [b for b in BASELINES if label == b or label.startswith(b + "-")]
+    return max(names, key=len) if names else label
+
+
 def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title: str, path: Path) -> Path:
-    """rows: (baseline label, summary) -> PNG with loss bars (left axis) and max in/out-degree bars (right)."""
+    """The paper's Figure 2, one panel more: rows (baseline label, summary with mean/std of cost, max_in, max_out)
+    -> PNG with (a) loss per baseline, (b) max in- and out-degree per baseline, tf-full's drawn as what it is
+    (every other agent) and marked so, (c) loss against max in-degree, the trade-off the method is about."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -15,27 +26,124 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     import numpy as np
 
     labels = [r[0] for r in rows]
-    x = np.arange(len(rows))
-    get = lambda m, k: [r[1][m][k] for r in rows]
-    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * len(rows) + 2), 3.6), dpi=120)
-    w = 0.27
-    ax.bar(x - w, get("cost", "mean"), w, yerr=get("cost", "std"), color="#f2c14e", capsize=3, label="loss")
-    ax.set_ylabel("loss (time-averaged, summed over agents)")
-    ax2 = ax.twinx()
-    # tf-full talks to everybody: like the paper, its degrees are not drawn
-    deg = [0.0 if lbl == "tf-full" else v for lbl, v in zip(labels, get("max_in", "mean"))]
-    dego = [0.0 if lbl == "tf-full" else v for lbl, v in zip(labels, get("max_out", "mean"))]
-    ax2.bar(x, deg, w, yerr=[0 if l == "tf-full" else s for l, s in zip(labels, get("max_in", "std"))],
-            color="#4e79a7", capsize=3, label="max in-degree")
-    ax2.bar(x + w, dego, w, yerr=[0 if l == "tf-full" else s for l, s in zip(labels, get("max_out", "std"))],
-            color="#e15759", capsize=3, label="max out-degree")
-    ax2.set_ylabel("degree")
-    ax.set_xticks(x, labels, rotation=20, ha="right")
-    ax.set_title(title, fontsize=9)
-    h1, l1 = ax.get_legend_handles_labels()
-    h2, l2 = ax2.get_legend_handles_labels()
-    fig.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower center", ncol=3, frameon=False)
-    fig.tight_layout(rect=(0, 0.07, 1, 1))  # room for the legend below the bars
+    colors = [color(baseline_of(lbl)) for lbl in labels]
+    y = np.arange(len(rows))[::-1]  # the paper's order from the top
+    get = lambda m, k: np.array([r[1][m][k] for r in rows], dtype=float)
+    hears_all = [baseline_of(lbl) == "tf-full" for lbl in labels]
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(13.5, 0.34 * len(rows) + 2.6), dpi=120,
+                                  gridspec_kw={"width_ratios": [1, 1, 1.25]})
+    a.barh(y, get("cost", "mean"), xerr=get("cost", "std"), color=colors, capsize=2)
+    a.set_yticks(y, labels, fontsize=8)
+    a.set_xlabel("loss (time-averaged, summed over agents; lower is better)", fontsize=8)
+    a.set_title("(a) loss", fontsize=9)
+    h = 0.38
+    b.barh(y + h / 2, get("max_in", "mean"), h, xerr=get("max_in", "std"), color=colors, capsize=2,
+           label="max in-degree (solid)")
+    b.barh(y - h / 2, get("max_out", "mean"), h, xerr=get("max_out", "std"), color=colors, capsize=2, alpha=0.55,
+           hatch="///", label="max out-degree (hatched)")
+    for yy, v, alltalk in zip(y, np.maximum(get("max_in", "mean"), get("max_out", "mean")), hears_all):
+        if alltalk:
+            b.annotate(" all: hears every other agent", (v, yy), va="center", fontsize=7)
+        elif v == 0:
+            b.annotate(" none", (0, yy), va="center", fontsize=7)
+    b.set_yticks(y, [])
+    b.set_xlim(0, 1.6 * max(float(get("max_in", "mean").max()), float(get("max_out", "mean").max()), 1.0))
+    b.set_xlabel("agents, max over agents and steps (mean over episodes)", fontsize=8)
+    b.set_title("(b) communication degree", fontsize=9)
+    b.legend(fontsize=7, frameon=False, loc="lower right")
+    xs, ls = get("max_in", "mean"), get("cost", "mean")
+    for col, x, xe, l, le in zip(colors, xs, get("max_in", "std"), ls, get("cost", "std")):
+        c.errorbar(x, l, xerr=xe, yerr=le, fmt="o", color=col, ms=6, capsize=2)
+    c.margins(x=0.25, y=0.12)
+    (x0, x1), (y0, y1) = c.get_xlim(), c.get_ylim()
+    x0 = max(x0, -0.06 * x1)  # a degree is never negative: no axis to the left of zero beyond the markers
+    c.set_xlim(x0, x1)
+    # labels of points that nearly coincide are spread upwards, with a leader line, instead of overprinted
+    gap, placed = 0.045 * (y1 - y0), []
+    for k in np.argsort(ls):
+        ly = ls[k]
+        for px, py in sorted(placed, key=lambda p: p[1]):
+            if abs(xs[k] - px) < 0.12 * (x1 - x0) and abs(ly - py) < gap:
+                ly = py + gap
+        placed.append((xs[k], ly))
+        c.annotate(baseline_of(labels[k]), (xs[k], ls[k]), xytext=(xs[k] + 0.03 * (x1 - x0), ly), fontsize=7,
+                   color=colors[k], va="center",
+                   arrowprops={"arrowstyle": "-", "color": colors[k], "lw": 0.5} if ly != ls[k] else None)
+    c.set_xlabel("max in-degree (whom an agent hears)", fontsize=8)
+    c.set_ylabel("loss", fontsize=8)
+    c.set_title("(c) loss against degree: lower left is better", fontsize=9)
+    c.grid(alpha=0.3, lw=0.5)
+    for ax in (a, b, c):
+        ax.tick_params(labelsize=7)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+_PALETTE = ("#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7", "#9c755f",
+            "#7f7f7f", "#17becf", "#8c564b")
+
+
+def color(baseline: str) -> str:
+    """One colour per baseline, the same in every figure (by its place in the paper's order)."""
+    from .baselines import rank
+
+    return _PALETTE[rank(baseline) % len(_PALETTE)]
+
+
+def _smooth(y, window: int):
+    """Trailing moving average over ``window`` steps (the first points average what exists)."""
+    import numpy as np
+
+    c = np.cumsum(np.insert(np.asarray(y, dtype=float), 0, 0.0))
+    n = np.arange(1, len(y) + 1)
+    lo = np.maximum(n - window, 0)
+    return (c[n] - c[lo]) / (n - lo)
+
+
+def training_curves(runs: Sequence[tuple[str, str, bool, Sequence[Sequence[tuple[float, float]]]]], title: str,
+                    path: Path, window: int = 5) -> Path:
+    """Training loss against rollouts, one line per model.
+
+    runs: (label, baseline name, retrained?, one [(rollouts, loss)] history per training seed). Models trained from
+    scratch and models retrained from the oracle get a panel each; a line is the mean over seeds of the moving
+    average over ``window`` optimizer steps, the band the spread (min to max) across seeds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+    import numpy as np
+
+    panels = [("trained from scratch (paper 3.1)", [r for r in runs if not r[2]]),
+              ("retrained from the oracle under a program or tree (3.5)", [r for r in runs if r[2]])]
+    panels = [p for p in panels if p[1]]
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 3.9), dpi=120, squeeze=False)
+    for ax, (name, group) in zip(axes[0], panels):
+        for label, baseline, _, histories in group:
+            n = min(len(h) for h in histories)
+            x = np.asarray([p[0] for p in histories[0][:n]])
+            ys = np.stack([_smooth([p[1] for p in h[:n]], window) for h in histories])
+            ax.plot(x, ys.mean(0), color=color(baseline), lw=1.6,
+                    label=label + (f" ({len(histories)} seeds)" if len(histories) > 1 else ""))
+            if len(histories) > 1:
+                ax.fill_between(x, ys.min(0), ys.max(0), color=color(baseline), alpha=0.2, lw=0)
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.tick_params(axis="y", which="minor", labelsize=7)
+        ax.set_xlabel("training rollouts" if "scratch" in name else "retraining rollouts")
+        ax.set_ylabel(f"training loss (moving average of {window} steps)")
+        ax.set_title(name, fontsize=9)
+        ax.grid(alpha=0.3, which="both", lw=0.5)
+        ax.legend(fontsize=7, frameon=False)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp.png")
     fig.savefig(tmp)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import baselines
 from ..config import RunConfig
-from ..plotting import figure2
+from ..plotting import figure2, training_curves
 from ..rollout import METRICS
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -63,13 +63,59 @@ def aggregate(root: Path) -> tuple[Rows, list[str]]:
     return rows, seeds
 
 
+def _model_baseline(model: str) -> tuple[str, bool]:
+    """A train/ directory name -> (baseline it makes, retrained?): oracle is tf-full's, retrained-* a retraining."""
+    if model == "oracle":
+        return baselines.ORACLE, False
+    if model.startswith("retrained-"):
+        tag = model.removeprefix("retrained-")
+        return ("det-prog-retrained" if tag.startswith("det-") else "dt-retrained" if tag.startswith("dt-")
+                else "prog-retrained"), True
+    return model.rsplit("-k", 1)[0] if model.rsplit("-k", 1)[0] in baselines.BASELINES else model, False
+
+
+def histories(root: Path) -> list[tuple[str, str, bool, list[list[tuple[float, float]]]]]:
+    """Training histories under ``root`` (its seed directories, or root itself): per model directory, its label,
+    baseline, whether it is a retraining, and one [(rollouts, loss)] per training seed, in the paper's order."""
+    import csv
+
+    files = sorted(root.glob("seed*/train/*/history.csv")) or sorted(root.glob("train/*/history.csv"))
+    runs: dict[str, list[list[tuple[float, float]]]] = {}
+    for f in files:
+        try:
+            with open(f, newline="") as fh:
+                h = [(float(r["rollouts"]), float(r["loss"])) for r in csv.DictReader(fh)]
+        except (OSError, KeyError, ValueError, TypeError):
+            log.warning("skipping %s: not a training history written by neurosym", f)
+            continue
+        if h:
+            runs.setdefault(f.parent.name, []).append(h)
+    out = []
+    for model, hs in runs.items():
+        baseline, retrained = _model_baseline(model)
+        label = "tf-full (the oracle)" if model == "oracle" else (
+            f"{baseline} {model.removeprefix('retrained-')}" if retrained else model)
+        out.append((label, baseline, retrained, hs))
+    out.sort(key=lambda r: (r[2], baselines.rank(r[1]), r[0]))
+    return out
+
+
+def write_curves(root: Path, head: str, path: Path) -> Path | None:
+    """Training curves of every model under ``root`` as a PNG (None when nothing was trained there)."""
+    runs = histories(root)
+    return training_curves(runs, head, path) if runs else None
+
+
 def title(cfg: RunConfig) -> str:
     return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
             f"mean ± std over {cfg.budget.eval_seeds} eval seeds")
 
 
 def write_figure(cfg: RunConfig) -> Path:
-    """Figure-2-style PNG of every baseline evaluated in this experiment directory."""
+    """Figure-2-style PNG of every baseline evaluated in this experiment directory (and the training curves of
+    its models beside it, curves.png)."""
+    write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
+                 "training curves", Path(cfg.exp_dir) / "eval" / "curves.png")
     return figure2(collect(Path(cfg.exp_dir)), title(cfg).replace(": ", ":\n"),
                    Path(cfg.exp_dir) / "eval" / "figure2.png")
 
@@ -78,7 +124,7 @@ def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
     png = write_figure(cfg)
     console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS))
-    console.print(f"plot of every baseline evaluated here: {png}")
+    console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
 
 
 def report(cfg: RunConfig) -> dict:
@@ -92,7 +138,7 @@ def report(cfg: RunConfig) -> dict:
     n = max(r[1]["cost"]["train_seeds"] for r in rows)
     spread = "std over training seeds" if n > 1 else "std over evaluation seeds (one training seed)"
     where = str(root) if cfg.report_dir else f"{cfg.task.name} ({cfg.budget.name} budget)"
-    head = f"{where}, {len(seeds)} training seed(s): mean ± {spread}"
+    head = f"{where}, {len(seeds)} training seed{'s' if len(seeds) > 1 else ''}: mean ± {spread}"
     console.print(metrics_table(head, rows, COLUMNS))
     try:
         write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
@@ -100,8 +146,10 @@ def report(cfg: RunConfig) -> dict:
         write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
                                                                for x in ("mean", "std")}} for label, s in rows])
         png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
+        curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed" + ("s" if len(seeds) > 1 else ""),
+                              root / "report_curves.png")
     except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
         log.warning("report files not written (%s); the table above is the report", e)
         return {"report": None}
-    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}")
+    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}" + (f", {curves}" if curves else ""))
     return {"report": str(root / "report.json")}

@@ -18,12 +18,17 @@ from ..synth.search import RoundSpec, as_program, search_round
 from ..utils.console import SearchDisplay, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
+from ..utils.tracking import open_tracker
 from ..dsl.files import load_program, save_program
 from ..utils.io import write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
 from .comm import baseline_comm
 from .show import render
+
+
+SEARCH_SCALARS = ("objective", "current", "best", "best_l1", "best_degree", "accepted")
+"""the columns of trace.csv sent to the run tracker at every proposal"""
 
 
 def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
@@ -74,9 +79,15 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                               cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
                               backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
-        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP) as disp:
+        run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
+        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP) as disp, \
+                open_tracker(cfg.logger, paths.tensorboard_dir(cfg, run)) as tracker:
+            def on_step(step: int, result, row: dict) -> None:
+                disp.update(step, result, row)
+                tracker.log(step, {f"search/{k}": row[k] for k in SEARCH_SCALARS})
+
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
-                               disp.update)
+                               on_step)
         disp.summary(res)
         full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
         results.append(res)

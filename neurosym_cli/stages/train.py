@@ -20,9 +20,21 @@ from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
+from ..utils.tracking import Tracker, open_tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
 from .comm import baseline_comm
+
+class Tracked:
+    """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
+
+    def __init__(self, reporter: ProgressReporter, tracker: Tracker):
+        self.reporter, self.tracker = reporter, tracker
+
+    def update(self, step: int, total: int, metrics: dict[str, float]) -> None:
+        self.reporter.update(step, total, metrics)
+        self.tracker.log(step, {f"train/{k}": v for k, v in metrics.items() if k != "step"})
+
 
 def check_compatible(saved: dict, cfg: RunConfig, current: dict, path) -> None:
     """A checkpoint is resumed or extended only under the same task, model and optimiser config. Keys of the
@@ -107,8 +119,11 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
              spec.horizon, device, out)
     t0 = time.perf_counter()
     steps_before = state.step if state else 0
-    with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep:
-        state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, rep, save, state)
+    tb = paths.tensorboard_dir(cfg, f"{verb}-{paths.model_name(cfg)}")
+    with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep, \
+            open_tracker(cfg.logger, tb, steps_before) as tracker:
+        state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
+                    save, state)
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
     last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
