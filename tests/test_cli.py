@@ -102,10 +102,16 @@ def test_multirun_two_seeds(tmp_path):
 
 
 def test_joblib_launcher_sweep(tmp_path):
-    run(["train", "-m", "seed=0,1", "budget=tiny", "task=two-groups-cross", "hydra/launcher=joblib",
-         "hydra.launcher.n_jobs=2"], tmp_path)
+    p = run(["train", "-m", "seed=0,1", "budget=tiny", "task=two-groups-cross", "hydra/launcher=joblib",
+             "hydra.launcher.n_jobs=2"], tmp_path)
     for s in (0, 1):
         assert (tmp_path / f"two-groups-cross/tiny/seed{s}/train/oracle/model.pt").exists()
+    out = p.stdout + p.stderr
+    assert "Joblib.Parallel(" not in out and "joblib: launching 2 jobs, n_jobs=2 at a time" in out
+    # each job's lines name the swept value, so parallel jobs' lines can be told apart
+    for s in (0, 1):
+        assert f"[seed={s}] done train two-groups-cross oracle seed{s}" in out
+        assert f"[seed={s}] train two-groups-cross oracle seed{s} step 1/2" in out
 
 
 def test_same_seed_same_model(tmp_path):
@@ -255,13 +261,14 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
 def test_per_seed_pipelines_and_report(tmp_path):
     run(["pipeline", "-m", "seed=0,1", "task=random-grid", "budget=tiny", "baselines=[tf-full,prog]"], tmp_path)
     p = run(["report", "task=random-grid", "budget=tiny"], tmp_path)
-    assert "2 training seed(s)" in p.stdout
+    assert "2 training seeds" in p.stdout
     p = run(["report", f"report_dir={tmp_path / 'random-grid/tiny/seed1'}"], tmp_path)
-    assert "1 training seed(s)" in p.stdout and (tmp_path / "random-grid/tiny/seed1/report.png").exists()
+    assert "1 training seed:" in p.stdout and (tmp_path / "random-grid/tiny/seed1/report.png").exists()
     rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
     assert set(rep["baselines"]) == {"tf-full", "prog-k2-lam0.5-v1"}
     assert rep["baselines"]["tf-full"]["cost"]["train_seeds"] == 2
     assert (tmp_path / "random-grid/tiny/report.png").stat().st_size > 1000
+    assert (tmp_path / "random-grid/tiny/report_curves.png").stat().st_size > 1000  # training curves
     assert (tmp_path / "random-grid/tiny/report.csv").read_text().startswith("baseline,cost_mean,cost_std")
     p = run(["report", "task=random-cross", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym pipeline task=random-cross" in p.stderr
