@@ -59,13 +59,25 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     x0 = max(x0, -0.06 * x1)  # a degree is never negative: no axis to the left of zero beyond the markers
     c.set_xlim(x0, x1)
     # labels of points that nearly coincide are spread upwards, with a leader line, instead of overprinted
-    gap, placed = 0.045 * (y1 - y0), []
+    gap, placed = 0.045 * (y1 - y0), []  # placed: (x, label y, label width) of the labels so far
+
+    def clash(k: int, w: float, ly: float) -> float | None:
+        """The y of a label or another marker that point k's label [x, x + w] at height ly would overprint."""
+        x = xs[k]
+        boxes = placed + [(px, pl, 0.0) for i, (px, pl) in enumerate(zip(xs, ls)) if i != k]
+        hits = [py for px, py, pw in boxes if px - 0.02 * (x1 - x0) <= x + w and x <= px + pw + 0.02 * (x1 - x0)
+                and abs(ly - py) < gap]
+        return max(hits) if hits else None
+
     for k in np.argsort(ls):
+        w = (0.03 + 0.013 * len(baseline_of(labels[k]))) * (x1 - x0)  # about 7-point characters on this panel
         ly = ls[k]
-        for px, py in sorted(placed, key=lambda p: p[1]):
-            if abs(xs[k] - px) < 0.12 * (x1 - x0) and abs(ly - py) < gap:
-                ly = py + gap
-        placed.append((xs[k], ly))
+        for _ in range(len(labels)):
+            hit = clash(k, w, ly)
+            if hit is None:
+                break
+            ly = max(ly, hit) + gap
+        placed.append((xs[k], ly, w))
         c.annotate(baseline_of(labels[k]), (xs[k], ls[k]), xytext=(xs[k] + 0.03 * (x1 - x0), ly), fontsize=7,
                    color=colors[k], va="center",
                    arrowprops={"arrowstyle": "-", "color": colors[k], "lw": 0.5} if ly != ls[k] else None)

@@ -12,7 +12,7 @@ from pathlib import Path
 from .. import paths
 from ..baselines import get
 from ..config import RunConfig
-from ..utils.console import log, say
+from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
@@ -47,8 +47,10 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = Path(cfg.exp_dir) / "pipeline_timings.json"
     timings = read_json(timing_file) if timing_file.exists() else {}
+    t0 = time.perf_counter()
     for k, stage in enumerate(stages, start=1):
-        log.info("pipeline stage %d/%d: %s", k, len(stages), stage.name)
+        log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
+                 clock(time.perf_counter() - t0))
         stage_cfg, stage_info = stage_config(cfg, info, stage)
         # stages print no intermediate tables or live views' final renders; the pipeline prints the final table
         stage_info.multirun = info.multirun or stage.verb == "eval"
@@ -62,5 +64,5 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         write_json(timing_file, timings)
     print_table(cfg)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
-        f"seed {cfg.seed})")
+        f"seed {cfg.seed}) in {clock(time.perf_counter() - t0)}")
     return results

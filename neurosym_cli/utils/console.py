@@ -88,11 +88,11 @@ class ProgressReporter:
             self.progress.update(self.task, completed=step, info=info)
         elif step % self.log_every == 0 or step == total or step == 1:
             elapsed = time.perf_counter() - self.t0
-            log.info("%s step %d/%d  %s  (%s elapsed, %s left)", self.label, step, total, info, _clock(elapsed),
-                     _clock(elapsed / max(step - self.first_step, 1) * (total - step)))
+            log.info("%s step %d/%d  %s  (%s elapsed, %s left)", self.label, step, total, info, clock(elapsed),
+                     clock(elapsed / max(step - self.first_step, 1) * (total - step)))
 
 
-def _clock(seconds: float) -> str:
+def clock(seconds: float) -> str:
     """Seconds as m:ss (or h:mm:ss)."""
     s = int(round(seconds))
     return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
@@ -181,12 +181,12 @@ class SearchDisplay:
             elapsed = now - self.t0
             log.info("%s step %d/%d (%s elapsed, %s left)  best objective %.4f = L1 %.4f + %g x degree term %.3f"
                      "  |  %.0f proposals/s  |  accepted per move: %s", self.label, step, self.total,
-                     _clock(elapsed), _clock(elapsed / step * (self.total - step)), b.total, b.l1, self.lam,
+                     clock(elapsed), clock(elapsed / step * (self.total - step)), b.total, b.l1, self.lam,
                      b.degree, result.proposals_per_second, acc)
 
     def summary(self, result) -> None:
         """One closing line: the best objective, its terms, and the search's cost."""
         b = result.best_score
         say(f"[green]search done[/] {self.label}: best objective {b.total:.4f} = L1 {b.l1:.4f} + {self.lam:g} x "
-            f"degree term {b.degree:.3f}; {sum(result.proposed.values())} proposals in {_clock(result.seconds)} "
+            f"degree term {b.degree:.3f}; {sum(result.proposed.values())} proposals in {clock(result.seconds)} "
             f"({result.proposals_per_second:.0f}/s)")
