@@ -102,12 +102,11 @@ def check_choices(args: list[str]) -> str | None:
     return None
 
 
+_SUBMITIT = ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install -e '.[cluster]' in the "
+             "neurosym checkout (or pip install hydra-submitit-launcher)")
 LAUNCHER_PLUGINS = {
     "joblib": ("hydra_plugins.hydra_joblib_launcher", "hydra-joblib-launcher (a dependency of neurosym; reinstall it)"),
-    "submitit_local": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
-    "submitit_slurm": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
-    "slurm": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
-    "slurm_local": ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install 'neurosym[cluster]'"),
+    **{name: _SUBMITIT for name in ("submitit_local", "submitit_slurm", "slurm", "slurm_local")},
 }
 """hydra/launcher choices -> (the plugin module they need, how to install it)"""
 

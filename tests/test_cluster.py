@@ -21,7 +21,8 @@ def test_missing_cluster_plugin_is_one_line_naming_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "hydra_plugins.hydra_submitit_launcher", None)  # as if not installed
     for launcher in ("submitit_slurm", "submitit_local", "slurm", "slurm_local"):
         msg = check_launcher(["-m", "seed=0,1", f"hydra/launcher={launcher}"])
-        assert msg == f"hydra/launcher={launcher} needs the cluster extra: pip install 'neurosym[cluster]'"
+        assert msg == (f"hydra/launcher={launcher} needs the cluster extra: pip install -e '.[cluster]' in the "
+                       "neurosym checkout (or pip install hydra-submitit-launcher)")
     assert check_launcher(["-m", "hydra/launcher=joblib"]) is None
 
 
@@ -32,7 +33,8 @@ def test_missing_plugin_through_the_console_script(tmp_path):
     p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert p.returncode == 2
     assert p.stderr.strip() == ("neurosym pipeline: error: hydra/launcher=submitit_slurm needs the cluster extra: "
-                                "pip install 'neurosym[cluster]'")
+                                "pip install -e '.[cluster]' in the neurosym checkout (or pip install "
+                                "hydra-submitit-launcher)")
     assert not (tmp_path / "outputs").exists()
 
 
@@ -125,7 +127,7 @@ def test_tensorboard_missing_is_one_line(monkeypatch, tmp_path):
     from neurosym_cli.utils.tracking import open_tracker
 
     monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", None)
-    with pytest.raises(UserError, match=r"pip install 'neurosym\[tensorboard\]'"):
+    with pytest.raises(UserError, match=r"pip install -e '\.\[tensorboard\]'"):
         open_tracker("tensorboard", tmp_path / "tb")
     open_tracker("csv", tmp_path / "tb").log(1, {"x": 1.0})  # the plain tracker needs nothing
 
@@ -220,4 +222,4 @@ def test_tiny_training_summary_says_what_it_averaged(tmp_path):
 
 def test_readme_documents_the_cluster_extra():
     readme = (ROOT / "README.md").read_text()
-    assert "neurosym[cluster]" in readme and "hydra/launcher=slurm" in readme and "logger=tensorboard" in readme
+    assert 'pip install -e ".[cluster]"' in readme and "hydra/launcher=slurm" in readme and "logger=tensorboard" in readme

@@ -34,8 +34,8 @@ class TensorBoardTracker(Tracker):
         try:
             from torch.utils.tensorboard import SummaryWriter
         except ImportError:
-            raise UserError("logger=tensorboard needs the tensorboard extra: pip install 'neurosym[tensorboard]' "
-                            "(or logger=csv)") from None
+            raise UserError("logger=tensorboard needs the tensorboard extra: pip install -e '.[tensorboard]' in the "
+                            "neurosym checkout (or pip install tensorboard; or logger=csv)") from None
         logdir.mkdir(parents=True, exist_ok=True)
         if not start:  # a run that starts over (overwrite=true, a new search) starts a new curve
             for old in logdir.glob("events.out.tfevents.*"):
