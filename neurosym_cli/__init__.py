@@ -6,7 +6,7 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
     layer 0: config baselines paths overrides utils  schemas, baseline registry, artifact names, override checks
     layer 1: dsl envs                            the program language; the batched differentiable tasks
     layer 2: policy                              the transformer and the communication providers
-    layer 3: artifacts rollout plotting          checkpoints; one batched rollout; figures
+    layer 3: artifacts rollout episode plotting viz   checkpoints; one batched rollout; a recorded episode; figures
     layer 4: training evaluation synth           the training loop; the evaluation protocol; program search
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)

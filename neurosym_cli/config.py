@@ -261,6 +261,34 @@ class BaselineConfig:
 
 
 @dataclass
+class RenderConfig:
+    """`neurosym render` (an episode as an animation and a picture) and `neurosym figures` (the paper's figures)."""
+
+    format: str = "gif"
+    """gif (matplotlib and Pillow) or mp4 (needs ffmpeg on the PATH)"""
+    fps: int = 20
+    """frames per second of the animation"""
+    every: int = 1
+    """a frame every this many steps"""
+    trail: int = 25
+    """steps of path drawn behind each agent"""
+    round: int = 1
+    """the communication round whose edges the animation draws (1-based; unlabeled-goals has 2)"""
+    step: int = 0
+    """the step whose attention the attention maps show"""
+    baselines: list[str] = field(default_factory=lambda: ["hard-attn", "prog-retrained"])
+    """figures: the baselines whose attention maps are drawn side by side"""
+    agent: int = 0
+    """figures: the asking agent of the rule-region picture (paper Figure 4)"""
+
+    def __post_init__(self) -> None:
+        _check(self.format in ("gif", "mp4"), f"render.format must be gif or mp4, got {self.format!r}")
+        _check(self.fps > 0 and self.every > 0 and self.trail >= 0 and self.round >= 1 and self.step >= 0
+               and self.agent >= 0, "render.fps and render.every must be positive; render.round at least 1; "
+               "render.trail, render.step and render.agent non-negative")
+
+
+@dataclass
 class SynthConfig:
     """MCMC program synthesis (paper section 3.4; docs/fidelity.md 'Synthesis')."""
 
@@ -344,6 +372,9 @@ class RunConfig:
     budget: BudgetConfig = field(default_factory=BudgetConfig)
     baseline: BaselineConfig = field(default_factory=BaselineConfig)
     synth: SynthConfig = field(default_factory=SynthConfig)
+    episode: int = 0
+    """render, figures: the evaluation protocol's episode (0, 1, ...: the test episodes of eval seed 0, then 1, ...)"""
+    render: RenderConfig = field(default_factory=RenderConfig)
 
     def __post_init__(self) -> None:
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")
@@ -352,6 +383,7 @@ class RunConfig:
                f"device must be auto, cpu or cuda, got {self.device!r}")
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
+        _check(self.episode >= 0, f"episode must be >= 0, got {self.episode}")
         _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
         cpus = os.cpu_count() or 1
         _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")

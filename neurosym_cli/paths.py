@@ -102,6 +102,16 @@ def dataset_file(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "synth" / f"dataset-r{cfg.budget.synth_rollouts}-s{cfg.synth.stride}.pt"
 
 
+def render_dir(cfg: RunConfig) -> Path:
+    """Animations and episode pictures of one baseline (`neurosym render`)."""
+    return Path(cfg.exp_dir) / "render" / baseline_label(cfg)
+
+
+def figures_dir(cfg: RunConfig) -> Path:
+    """The paper's figures drawn from this run directory (`neurosym figures`)."""
+    return Path(cfg.exp_dir) / "figures"
+
+
 def tensorboard_dir(cfg: RunConfig, run: str) -> Path:
     """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
     return Path(cfg.exp_dir) / "tensorboard" / run

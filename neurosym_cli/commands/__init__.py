@@ -9,5 +9,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "show-program": ("show_program", "print a synthesized program in the paper's notation, with its reading"),
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
     "report": ("report", "one table and plot over every training seed of a task and budget"),
+    "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
 }
 """command-line name -> (module and primary config name, one-line help)"""

@@ -3,7 +3,7 @@ against the task."""
 
 from __future__ import annotations
 
-from .. import paths
+from .. import artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
 from ..envs.features import feature_names
@@ -46,3 +46,17 @@ def baseline_comm(cfg: RunConfig) -> CommProvider:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
         return TreeComm(rounds, cfg.task.kind, cfg.features)
     return make_comm(cfg.baseline.comm, cfg.rules)
+
+
+def load_baseline(cfg: RunConfig, device):
+    """(policy on ``device``, env, provider) of ``cfg.baseline``: its trained weights and its communication.
+    A partly trained model is used with a warning naming the command that finishes it."""
+    from ..envs import make_env
+    from ..utils.console import log
+
+    payload = artifacts.load_checkpoint(paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
+    if not payload.get("done"):
+        log.warning("the model is only partly trained (step %d); using it anyway; `%s` finishes it",
+                    payload["fit"]["step"], paths.train_command(cfg))
+    policy = artifacts.policy_from_payload(payload).to(device)
+    return policy, make_env(cfg.task, cfg.horizon), baseline_comm(cfg)

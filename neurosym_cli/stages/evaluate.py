@@ -7,27 +7,20 @@ import time
 
 from .. import __version__, artifacts, paths
 from ..config import RunConfig
-from ..envs import make_env
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
-from .comm import baseline_comm
+from .comm import load_baseline
 
 
 def evaluate_baseline(cfg: RunConfig, info: RunInfo) -> dict:
     """Mean, std and 95 % interval over seeds of every metric; per-seed rows beside them."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
-    payload = artifacts.load_checkpoint(paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
-    if not payload.get("done"):
-        log.warning("the model is only partly trained (step %d); evaluating it anyway; `%s` finishes it",
-                    payload["fit"]["step"], paths.train_command(cfg))
-    policy = artifacts.policy_from_payload(payload).to(device)
-    env = make_env(cfg.task, cfg.horizon)
-    comm = baseline_comm(cfg)
+    policy, env, comm = load_baseline(cfg, device)
     seeds = list(range(cfg.budget.eval_seeds))
     t0 = time.perf_counter()
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)

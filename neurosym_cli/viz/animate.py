@@ -1,0 +1,212 @@
+"""A recorded episode as an animation (GIF; MP4 through ffmpeg) and as one static picture.
+
+Each frame: the goals, the agents (by group), their recent trails, and whom each agent hears at this step, drawn
+as a line from the heard agent to the listener: coloured by the rule that chose it for a program, with the
+attention weight as opacity for soft attention, plain for the other masks. Agents that collide are ringed in
+red. The title line counts steps and gives the running loss and the max in- and out-degree of the step.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from ..episode import EpisodeRecord
+from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
+                   matplotlib_agg, save_figure, wrap_title)
+
+EDGE_STYLES = ("rules", "weights", "mask")
+"""how a frame draws edges: coloured by rule (programs), opacity = attention weight (soft attention), plain"""
+
+
+def edge_style(rec: EpisodeRecord, comm: str) -> str:
+    """The drawing of a provider's edges: ``comm`` is the baseline's provider kind (program, full, topk, ...)."""
+    if comm == "program" and rec.picks is not None:
+        return "rules"
+    return "weights" if comm == "full" else "mask"
+
+
+def _edges(rec: EpisodeRecord, t: int, r: int, style: str, rules: np.ndarray | None):
+    """Segments (E, 2, 2) and RGBA colours (E, 4) of step t, round r."""
+    from matplotlib.colors import to_rgba
+
+    seg, ij = edge_segments(rec.pos[t], rec.mask[t, r], shrink=0.04)
+    if not len(seg):
+        return seg, np.zeros((0, 4))
+    if style == "rules":
+        assert rules is not None
+        k = rules[t, r, ij[:, 0], ij[:, 1]]
+        colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.85) for x in k])
+    else:
+        colors = np.tile(to_rgba(EDGE_COLOR, 0.6), (len(seg), 1))
+        if style == "weights":  # soft attention: what fraction of i's attention goes to j
+            colors[:, 3] = np.clip(rec.attn[t, r, ij[:, 0], ij[:, 1]], 0.02, 1.0)
+    return seg, colors
+
+
+class _Scene:
+    """One figure whose artists are updated frame by frame (drawn once, then only moved: fast)."""
+
+    def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, size: float = 5.6,
+                 dpi: int = 90):
+        from matplotlib.collections import LineCollection
+        from matplotlib.lines import Line2D
+
+        plt = matplotlib_agg()
+        self.rec, self.style, self.round, self.trail = rec, style, round_, trail
+        self.rules = rec.rule_of_edge() if style == "rules" else None
+        self.deg_in, self.deg_out = rec.degrees()
+        xlim, ylim, ratio = frame_limits(rec.pos, rec.goal)
+        self.fig, ax = plt.subplots(figsize=(max(size, size * ratio ** 0.5), size / ratio ** 0.5 + 1.2), dpi=dpi)
+        self.ax = ax
+        colors = group_color(rec.group) if rec.labelled else ["#4e79a7"] * rec.n_agents
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*ylim)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=7)
+        goal_colors = colors if rec.labelled else ["#555555"] * len(rec.goal)
+        ax.scatter(rec.goal[:, 0], rec.goal[:, 1], marker="x", s=22, c=goal_colors, lw=1.0, zorder=1)
+        # the moving parts are "animated": left out of the background, drawn over it frame by frame (blitting)
+        self.trails = LineCollection([], colors=colors, lw=0.8, alpha=0.45, zorder=2, animated=True)
+        ax.add_collection(self.trails)
+        self.edges = LineCollection([], lw=1.1, zorder=3, animated=True)
+        ax.add_collection(self.edges)
+        self.agents = ax.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=26, c=colors, edgecolors="white",
+                                 linewidths=0.5, zorder=4, animated=True)
+        self.rings = ax.scatter([], [], s=90, facecolors="none", edgecolors=COLLISION_COLOR, linewidths=1.4,
+                                zorder=5, animated=True)
+        self.text = ax.text(0.5, 1.015, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=8,
+                            family="monospace", animated=True)
+        self.moving = (self.trails, self.edges, self.agents, self.rings, self.text)
+        self.fig.suptitle(wrap_title(title), fontsize=8)
+        handles = [Line2D([], [], marker="o", ls="", color=colors[0], ms=5, label="agent"),
+                   Line2D([], [], marker="x", ls="", color=goal_colors[0], ms=5, label="goal"),
+                   Line2D([], [], marker="o", ls="", mfc="none", mec=COLLISION_COLOR, ms=8, label="collision")]
+        if style == "rules":
+            k = rec.picks.shape[-1] if rec.picks is not None else 0
+            handles += [Line2D([], [], color=RULE_COLORS[i % len(RULE_COLORS)], label=f"hears, by rule {i + 1}")
+                        for i in range(k)]
+        else:
+            label = "hears (opacity: attention weight)" if style == "weights" else "hears"
+            handles.append(Line2D([], [], color=EDGE_COLOR, label=label))
+        ax.legend(handles=handles, fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=4,
+                  frameon=False)
+        self.fig.tight_layout(rect=(0, 0, 1, 0.97))
+        self.fig.canvas.draw()
+        self.background = self.fig.canvas.copy_from_bbox(self.fig.bbox)  # everything that never moves
+    def draw(self, t: int) -> None:
+        """Show the state after ``t`` steps (t = 0: the start) with the edges used at step t (the last step's at
+        the end)."""
+        rec = self.rec
+        s = min(t, rec.steps - 1)  # communication of the step being taken (the last one at the end)
+        lo = max(0, t - self.trail)
+        self.trails.set_segments([rec.pos[lo:t + 1, i] for i in range(rec.n_agents)] if t > 0 else [])
+        seg, colors = _edges(rec, s, self.round, self.style, self.rules)
+        self.edges.set_segments(seg)
+        self.edges.set_color(colors)
+        self.agents.set_offsets(rec.pos[t])
+        hit = rec.collide[t - 1] if t > 0 else np.zeros(rec.n_agents, bool)
+        self.rings.set_offsets(rec.pos[t][hit] if hit.any() else np.zeros((0, 2)))
+        loss = f"{rec.cost[:t].mean():7.2f}" if t > 0 else "      -"
+        self.text.set_text(f"step {t:>3}/{rec.steps}  loss so far {loss}  "
+                           f"max in-deg {self.deg_in[s]:.0f}  max out-deg {self.deg_out[s]:.0f}  "
+                           f"colliding {int(hit.sum())}")
+
+    def frame(self) -> np.ndarray:
+        """(H, W, 3) uint8 pixels of the current drawing: the background, then the moving parts over it."""
+        self.fig.canvas.restore_region(self.background)
+        for artist in self.moving:
+            self.ax.draw_artist(artist)
+        return np.asarray(self.fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def close(self) -> None:
+        matplotlib_agg().close(self.fig)
+
+
+def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int = 1, fps: int = 20,
+            trail: int = 25, round_: int = 0) -> tuple[Path, int]:
+    """Write the episode as a GIF (path ending .gif) or MP4 (.mp4, needs ffmpeg): frames at steps 0, every,
+    2 every, ..., T. Returns the path and the number of frames."""
+    from PIL import Image
+
+    if path.suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise FileNotFoundError("MP4 needs ffmpeg on the PATH; render.format=gif needs nothing more")
+    steps = list(range(0, rec.steps + 1, max(1, every)))
+    if steps[-1] != rec.steps:
+        steps.append(rec.steps)
+    scene = _Scene(rec, title, style, round_, trail)
+    try:
+        frames = []
+        for t in steps:
+            scene.draw(t)
+            frames.append(scene.frame())
+    finally:
+        scene.close()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
+    if path.suffix == ".mp4":
+        h, w, _ = frames[0].shape
+        h2, w2 = h - h % 2, w - w % 2  # yuv420p needs even sizes
+        cmd = ["ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w2}x{h2}",
+               "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vcodec", "libx264", str(tmp)]
+        subprocess.run(cmd, input=b"".join(f[:h2, :w2].tobytes() for f in frames), check=True)
+    else:
+        # one palette for every frame (the first frame's colours plus the edge colours): fast, small, no flicker
+        # the palette comes from a mosaic of frames across the episode, by octree (keeps small areas of distinct
+        # colour, the agents, that a pixel-count method gives to the background's shades)
+        sample = frames[:: max(1, len(frames) // 6)]
+        palette = Image.fromarray(np.concatenate(sample)).quantize(colors=255, method=Image.Quantize.FASTOCTREE)
+        quant = [Image.fromarray(f).quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
+        quant[0].save(tmp, format="GIF", save_all=True, append_images=quant[1:], duration=int(1000 / fps), loop=0)
+    tmp.replace(path)
+    return path, len(frames)
+
+
+def episode_png(rec: EpisodeRecord, path: Path, title: str) -> Path:
+    """The whole episode in one picture: every agent's path from start (open circle) to end (dot) with the goals,
+    and beside it the loss and the max in- and out-degree of every step."""
+    plt = matplotlib_agg()
+    colors = group_color(rec.group) if rec.labelled else ["#4e79a7"] * rec.n_agents
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.8), dpi=110, gridspec_kw={"width_ratios": [1, 1.15]})
+    xlim, ylim, _ = frame_limits(rec.pos, rec.goal)
+    for i in range(rec.n_agents):
+        a.plot(rec.pos[:, i, 0], rec.pos[:, i, 1], color=colors[i], lw=0.8, alpha=0.8)
+    a.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=16, facecolors="none", edgecolors=colors, lw=0.8,
+              label="start")
+    a.scatter(rec.pos[-1, :, 0], rec.pos[-1, :, 1], s=16, c=colors, label="end")
+    goal_colors = colors if rec.labelled else ["#555555"] * len(rec.goal)
+    a.scatter(rec.goal[:, 0], rec.goal[:, 1], marker="x", s=22, c=goal_colors, lw=1.0, label="goal")
+    hits = np.argwhere(rec.collide)
+    if len(hits):
+        a.scatter(rec.pos[hits[:, 0] + 1, hits[:, 1], 0], rec.pos[hits[:, 0] + 1, hits[:, 1], 1], s=50,
+                  facecolors="none", edgecolors=COLLISION_COLOR, lw=1.0, label="collision")
+    a.set_xlim(*xlim)
+    a.set_ylim(*ylim)
+    a.set_aspect("equal")
+    a.set_title("paths (colour: group)", fontsize=9)
+    a.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=4, frameon=False)
+    a.tick_params(labelsize=7)
+    steps = np.arange(1, rec.steps + 1)
+    b.plot(steps, rec.cost, color="#333333", lw=1.2, label="loss of the step (left axis)")
+    b.set_xlabel("step", fontsize=8)
+    b.set_ylabel("loss of the step, summed over agents", fontsize=8)
+    b.set_yscale("log")
+    b2 = b.twinx()
+    din, dout = rec.degrees()
+    b2.step(steps, din, where="mid", color="#4e79a7", lw=1.0, label="max in-degree (right axis)")
+    b2.step(steps, dout, where="mid", color="#e15759", lw=1.0, ls="--", label="max out-degree (right axis)")
+    b2.set_ylabel("degree (agents)", fontsize=8)
+    b2.set_ylim(0, max(1.0, float(max(din.max(), dout.max()))) * 1.15)
+    h1, l1 = b.get_legend_handles_labels()
+    h2, l2 = b2.get_legend_handles_labels()
+    b.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper right", frameon=False)
+    b.set_title(f"loss {rec.cost.mean():.2f} (time-averaged); collisions {int(rec.collide.sum())} agent-steps",
+                fontsize=9)
+    for ax in (b, b2):
+        ax.tick_params(labelsize=7)
+    fig.suptitle(wrap_title(title), fontsize=9)
+    fig.tight_layout()
+    return save_figure(fig, path)

@@ -1,0 +1,75 @@
+"""Drawing helpers shared by every episode picture: colours, world limits, the agents-and-goals scene, saving."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+GROUP_COLORS = ("#4e79a7", "#f28e2b", "#59a14f", "#b07aa1", "#76b7b2", "#edc948", "#9c755f", "#ff9da7")
+"""agents and goals by group (formation tasks); unlabeled agents all take the first"""
+RULE_COLORS = ("#d62728", "#111111", "#17becf", "#bcbd22", "#8c564b", "#e377c2", "#7f7f7f", "#9467bd")
+"""communication edges of a program, by the rule that chose them"""
+EDGE_COLOR = "#333333"
+"""edges of providers without rules (hard-attn, dist, dt) and soft attention (opacity = weight)"""
+COLLISION_COLOR = "#d62728"
+
+
+def matplotlib_agg():
+    """pyplot on the non-interactive Agg back-end (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def group_color(group: np.ndarray) -> list[str]:
+    return [GROUP_COLORS[int(g) % len(GROUP_COLORS)] for g in group]
+
+
+def world_limits(*points: np.ndarray, margin: float = 0.06) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Square limits around every point given (arrays (..., 2)), with a margin, for an equal-aspect plot."""
+    xy = np.concatenate([p.reshape(-1, 2) for p in points])
+    lo, hi = xy.min(0), xy.max(0)
+    c, half = (lo + hi) / 2, (hi - lo).max() / 2 * (1 + 2 * margin) + 1e-6
+    return (c[0] - half, c[0] + half), (c[1] - half, c[1] + half)
+
+
+def frame_limits(*points: np.ndarray, margin: float = 0.06, ratio: tuple[float, float] = (0.75, 2.0)):
+    """Limits around every point with a margin whose width/height stays within ``ratio`` (so a scene that is
+    wide gets a wide frame, not a square one mostly empty): ((x0, x1), (y0, y1)), width / height."""
+    xy = np.concatenate([p.reshape(-1, 2) for p in points])
+    lo, hi = xy.min(0), xy.max(0)
+    c, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-6) * (1 + 2 * margin)
+    r = float(np.clip(half[0] / half[1], *ratio))
+    half = np.maximum(half, [half[1] * r, half[0] / r])
+    return (c[0] - half[0], c[0] + half[0]), (c[1] - half[1], c[1] + half[1]), float(half[0] / half[1])
+
+
+def wrap_title(title: str) -> str:
+    """A long title broken after its first colon, the way the figures' titles are built (what: which)."""
+    head, sep, tail = title.partition(": ")
+    return f"{head}:\n{tail}" if sep else title
+
+
+def edge_segments(pos: np.ndarray, mask: np.ndarray, shrink: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """pos (N, 2), mask (N, N) bool (i hears j) -> segments (E, 2, 2) from j to i, and their (i, j) (E, 2)."""
+    ii, jj = np.nonzero(mask)
+    seg = np.stack([pos[jj], pos[ii]], 1)  # from the speaker j to the listener i
+    if shrink and len(seg):
+        d = seg[:, 1] - seg[:, 0]
+        seg = seg + np.stack([d * shrink, -d * shrink], 1)
+    return seg, np.stack([ii, jj], 1)
+
+
+def save_figure(fig, path: Path) -> Path:
+    """Write a figure atomically (temp file, then rename) and close it."""
+    plt = matplotlib_agg()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
+    fig.savefig(tmp)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
