@@ -24,6 +24,7 @@ class EpisodeRecord:
     """One episode of N agents over T steps and R communication rounds (numpy arrays, world units)."""
 
     pos: np.ndarray  # (T + 1, N, 2) positions, before the first step and after each step
+    inputs: np.ndarray  # (T, N, Ds) each agent's private input s_i at step t (read by own-state features)
     goal: np.ndarray  # (N, 2) each agent's goal (formation) or (G, 2) the goal set (unlabeled)
     group: np.ndarray  # (N,) group of each agent (zeros for unlabeled)
     mask: np.ndarray  # (T, R, N, N) bool: agent i hears agent j at step t, round r
@@ -99,10 +100,11 @@ def record_episode(env: MultiAgentEnv, policy: CommTransformer, comm: CommProvid
     rec = _Recorder(comm)
     rng = Rng([gen], device)
     state = state.to(device)
-    pos, masks, attns, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], []
+    pos, inputs, masks, attns, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], [], []
     dist_c = float(getattr(getattr(env, "cfg", None), "collision_dist", 0.0))
     for _ in range(horizon):
         obs = env.observe(state, rng)
+        inputs.append(obs.agent[0].cpu())
         ctx = CommContext(env, state, obs, rng)
         rec.picked.clear()
         out = policy(obs, lambda logits, r: rec.select(ctx, logits, r), lambda r: rec.picks(ctx, r))
@@ -117,7 +119,8 @@ def record_episode(env: MultiAgentEnv, policy: CommTransformer, comm: CommProvid
         collide.append((d < dist_c).any(-1).cpu())
     policy.train(was_training)
     return EpisodeRecord(
-        pos=torch.stack(pos).numpy(), goal=state.goal[0].cpu().numpy(), group=state.group[0].cpu().numpy(),
+        pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=state.goal[0].cpu().numpy(),
+        group=state.group[0].cpu().numpy(),
         mask=torch.stack(masks).numpy(), attn=torch.stack(attns).float().numpy(),
         picks=torch.stack(picks).numpy() if len(picks) == horizon else None,
         cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=state.goal_order is None,

@@ -8,10 +8,12 @@ import dataclasses
 import difflib
 import re
 
-from .config import TASK_SCHEMAS, BaselineConfig, BudgetConfig, ModelConfig, OptimConfig, RunConfig, SynthConfig
+from .config import TASK_SCHEMAS, RunConfig
 
-_SCHEMAS = {"model": ModelConfig, "optim": OptimConfig, "budget": BudgetConfig, "baseline": BaselineConfig,
-            "synth": SynthConfig}
+_SCHEMAS = {f.name: type(f.default_factory()) for f in dataclasses.fields(RunConfig)  # type: ignore[misc]
+            if f.name != "task" and f.default_factory is not dataclasses.MISSING
+            and dataclasses.is_dataclass(f.default_factory())}
+"""the config sections (model, optim, budget, baseline, synth, render, ...): every dataclass field of RunConfig"""
 _SECTIONS = tuple(_SCHEMAS)
 _GROUPS = ("task", "baseline", "budget")  # config groups: key=<option name>
 _FUNCS = ("range(", "choice(", "glob(", "interval(", "shuffle(", "sort(", "tag(", "str(", "int(", "float(", "bool(")

@@ -10,5 +10,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
     "report": ("report", "one table and plot over every training seed of a task and budget"),
     "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
+    "figures": ("figures", "the paper's figures 1, 3, 4, 5 from a run directory: attention, paths, rule regions"),
 }
 """command-line name -> (module and primary config name, one-line help)"""

@@ -3,14 +3,18 @@ baseline as an animation and a static picture; `neurosym figures` draws the pape
 
 from __future__ import annotations
 
+import dataclasses
+
 from .. import paths
-from ..config import ConfigError, RunConfig
+from ..baselines import get
+from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
 from ..utils.console import log, say
+from ..utils.io import ArtifactError
 from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
 from . import RunInfo
-from .comm import load_baseline
+from .comm import baseline_comm, load_baseline
 
 
 def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, str]:
@@ -50,3 +54,85 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
              rec.n_agents)
     say(f"[green]rendered[/] {anim} ({frames} frames) and {png}")
     return {"animation": str(anim), "frames": frames, "png": str(png), "loss": float(rec.cost.mean())}
+
+
+def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
+    return dataclasses.replace(cfg, baseline=get(name))
+
+
+def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, EpisodeRecord]]:
+    """(label, record) of each baseline that exists in the run directory; the missing ones are logged."""
+    out = []
+    for name in names:
+        b = _with_baseline(cfg, name)
+        try:
+            rec, _ = record(b, episode)
+        except UserError as e:
+            log.warning("figures: no %s here (%s)", name, e)
+            continue
+        out.append((paths.baseline_label(b), rec))
+    return out
+
+
+def _setting_episodes(cfg: RunConfig) -> tuple[int, int] | None:
+    """(the test episode of eval seed 0 with the most groups, one with a single group), by the task's named test
+    settings ("0-1-2-3", "0"); None for tasks without them."""
+    names = list(getattr(cfg.task, "test_settings", []) or [])
+    if not names:
+        return None
+    most = max(range(len(names)), key=lambda k: names[k].count("-"))
+    single = next((k for k, nm in enumerate(names) if "-" not in nm), 0)
+    return most, single
+
+
+def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
+    """`neurosym figures`: the paper's figures that this run directory has the models for, in <exp_dir>/figures/:
+    attention maps (render.baselines side by side, episode=, render.step=), trajectories of prog-retrained vs dist
+    (formation tasks: the test episode with the most groups and one with a single group), Figure 1
+    (two-groups-cross), rule regions of the program (render.agent=), Figure 5 (unlabeled-goals)."""
+    from ..viz import figures as fig
+
+    out = paths.figures_dir(cfg)
+    head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
+    made: dict[str, str] = {}
+    step = cfg.render.step
+    recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
+    if recs:
+        made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-episode{cfg.episode}.png",
+                                                   f"{head}: attention at episode {cfg.episode}"))
+    settings = _setting_episodes(cfg)
+    if settings is not None:
+        panels = []
+        for k in dict.fromkeys(settings):  # the two episodes (one if they coincide)
+            pair = _records(cfg, ["prog-retrained", "dist"], k)
+            if pair:
+                groups = len(set(pair[0][1].group.tolist()))
+                panels.append((f"episode {k}: {groups} group(s), N = {pair[0][1].n_agents}", pair))
+        if panels:
+            made["trajectories"] = str(fig.trajectories(panels, out / "trajectories.png",
+                                                        f"{head}: group paths, prog-retrained solid, dist dashed"))
+    if cfg.task.name == "two-groups-cross" and settings is not None:
+        full, prog = _records(cfg, ["tf-full"], settings[0]), _records(cfg, ["prog-retrained"], settings[0])
+        if full and prog:
+            made["figure1"] = str(fig.figure1(full[0], prog[0], out / "figure1.png",
+                                              f"{head}: Figure 1, episode {settings[0]}"))
+    prog_cfg = _with_baseline(cfg, "prog-retrained")
+    prog = _records(cfg, ["prog-retrained"], cfg.episode)
+    if prog:
+        label, rec = prog[0]
+        program = baseline_comm(prog_cfg).program  # type: ignore[attr-defined]
+        agent = min(cfg.render.agent, rec.n_agents - 1)
+        for r in range(program.n_rounds):
+            name = f"rules-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
+            made[f"rules{r + 1}"] = str(fig.rule_regions(
+                program, cfg.task.kind, cfg.features, rec, agent, min(step, rec.steps - 1), r, out / name,
+                f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
+        if cfg.task.kind == "unlabeled":
+            made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-episode{cfg.episode}.png",
+                                                      f"{head}: Figure 5, episode {cfg.episode}"))
+    if not made:
+        raise ArtifactError(f"no trained baselines to draw in {cfg.exp_dir}; run `neurosym pipeline "
+                            f"task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` first")
+    for name, p in made.items():
+        say(f"[green]figure[/] {name}: {p}")
+    return made

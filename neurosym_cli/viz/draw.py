@@ -69,7 +69,7 @@ def save_figure(fig, path: Path) -> Path:
     plt = matplotlib_agg()
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
-    fig.savefig(tmp)
+    fig.savefig(tmp, bbox_inches="tight", pad_inches=0.12)  # legends below the axes are kept, never clipped
     plt.close(fig)
     tmp.replace(path)
     return path
