@@ -1,0 +1,154 @@
+"""Pictures of whom agents talk to: recorded episodes, animations, attention maps, rule regions, the CLI verbs."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+import torch
+
+from test_cli import run
+
+PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41, l))\n"
+
+
+def _setup(test_settings=("0", "0-1"), horizon=12):
+    from neurosym_cli.config import CrossConfig, ModelConfig
+    from neurosym_cli.envs import make_env
+    from neurosym_cli.policy import CommTransformer
+
+    task = CrossConfig(name="two-groups-cross", env="two-groups-cross", kind="formation", num_groups=2,
+                       agents_per_group=4, test_settings=list(test_settings))
+    env = make_env(task, horizon)
+    torch.manual_seed(0)
+    policy = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig(width=16, ffn=32))
+    return env, policy
+
+
+def _program():
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.policy.comm import ProgramComm
+
+    return ProgramComm(parse(PROGRAM), "formation")
+
+
+def test_recorded_episodes_are_the_evaluation_protocols_episodes():
+    """The loss of the recorded episodes of eval seed 0 averages to what `neurosym eval` reports for that seed."""
+    from neurosym_cli.episode import protocol_episode, record_episode
+    from neurosym_cli.evaluation import evaluate
+
+    env, policy = _setup()
+    comm = _program()
+    row = evaluate(env, policy, comm, [0], torch.device("cpu"))[0]
+    losses = []
+    for k in range(2):  # seed 0 has one episode per test setting
+        state, gen, seed = protocol_episode(env, k)
+        assert seed == 0
+        losses.append(record_episode(env, policy, comm, state, gen, torch.device("cpu")).cost.mean())
+    assert np.mean(losses) == pytest.approx(row["cost"], rel=1e-5)
+    assert protocol_episode(env, 2)[2] == 1  # episode 2 is the first of eval seed 1
+
+
+def test_soft_attention_rows_sum_to_one_and_program_rows_have_at_most_k():
+    from neurosym_cli.episode import protocol_episode, record_episode
+    from neurosym_cli.policy import make_comm
+
+    env, policy = _setup()
+    state, gen, _ = protocol_episode(env, 1)  # both groups: N = 8
+    full = record_episode(env, policy, make_comm("full", 2), state, gen, torch.device("cpu"))
+    assert full.attn.shape == (12, 1, 8, 8)
+    assert np.allclose(full.attn.sum(-1), 1.0, atol=1e-5)
+    assert np.all(np.diagonal(full.attn, axis1=-2, axis2=-1) == 0)
+    state, gen, _ = protocol_episode(env, 1)
+    prog = record_episode(env, policy, _program(), state, gen, torch.device("cpu"))
+    nonzero = (prog.attn > 0).sum(-1)
+    assert nonzero.max() <= 2 and nonzero.max() >= 1
+    assert np.allclose(prog.attn.sum(-1)[nonzero > 0], 1.0, atol=1e-5)
+    # every edge of the mask is named by the rule that chose it, and only edges are
+    rules = prog.rule_of_edge()
+    assert np.array_equal(rules >= 0, prog.mask)
+    assert set(np.unique(rules)) <= {-1, 0, 1}
+    din, dout = prog.degrees()
+    assert np.all(din <= 2) and din.shape == (12,)
+
+
+def test_rule_regions_equal_the_evaluators_filter():
+    """The shaded region of a rule is exactly where the DSL evaluator lets a real agent pass its filter."""
+    from neurosym_cli.dsl.interpret import cond
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.envs.features import PairFeatures
+    from neurosym_cli.viz.figures import rule_grid
+
+    program = parse("random(filter(dx <= -1.0 and gd >= 2.0 or theta >= 1.0, l))\nargmax(map(-1.0*d, filter(d >= 1.5, l)))\n")
+    s_i = np.array([1.5, -2.0], dtype=np.float32)  # x - g: the goal vector is (-1.5, 2.0), gd = 2.5
+    origin = np.array([0.3, -0.4])
+    xs, ys = np.linspace(-4, 4, 23), np.linspace(-3, 5, 19)
+    regions = rule_grid(program, 0, "formation", "v1", s_i, origin, xs, ys)
+    gx, gy = np.meshgrid(xs, ys)
+    pts = torch.tensor(np.stack([gx.ravel(), gy.ravel()], -1), dtype=torch.float32)
+    n = 1 + len(pts)  # one real bucket: the asking agent and an agent at every grid point
+    pos = torch.cat([torch.tensor(origin, dtype=torch.float32)[None], pts])[None]  # (1, N, 2)
+    rel = pos[:, None, :, :] - pos[:, :, None, :]
+    agent = torch.tensor(s_i).expand(1, n, 2)
+    feats = PairFeatures("formation", agent, rel, "v1")
+    for rule, (keep, score) in zip(program.rounds[0], regions):
+        truth = cond(rule.cond, feats)[0, 0, 1:].reshape(gy.shape).numpy()
+        assert np.array_equal(keep, truth)
+        assert 0 < keep.sum() < keep.size  # the test has both sides
+    assert regions[0][1] is None and regions[1][1] is not None
+    assert np.allclose(regions[1][1], -np.hypot(gx - origin[0], gy - origin[1]), atol=1e-5)
+
+
+def test_animation_frames_and_static_picture(tmp_path):
+    from PIL import Image
+
+    from neurosym_cli.episode import protocol_episode, record_episode
+    from neurosym_cli.viz.animate import animate, episode_png
+
+    env, policy = _setup(horizon=10)
+    state, gen, _ = protocol_episode(env, 1)
+    rec = record_episode(env, policy, _program(), state, gen, torch.device("cpu"))
+    path, frames = animate(rec, tmp_path / "ep.gif", "test: prog", "rules", every=3)
+    assert frames == 5  # steps 0, 3, 6, 9 and the last, 10
+    im = Image.open(path)
+    assert im.n_frames == 5 and im.size[0] > 300 and im.size[1] > 300
+    pix = []
+    for k in (0, 4):
+        im.seek(k)
+        pix.append(np.asarray(im.convert("RGB"), dtype=float))
+    assert np.abs(pix[0] - pix[1]).mean() > 0.5  # the agents moved
+    png = episode_png(rec, tmp_path / "ep.png", "test: prog")
+    assert Image.open(png).size[0] > 600
+    if shutil.which("ffmpeg") is None:
+        with pytest.raises(FileNotFoundError, match="ffmpeg"):
+            animate(rec, tmp_path / "ep.mp4", "test", "rules")
+
+
+def test_render_and_figures_from_a_tiny_run(tmp_path):
+    base = "baselines=[tf-full,hard-attn,dist,prog,prog-retrained]"
+    run(["pipeline", "task=two-groups-cross", "budget=tiny", base], tmp_path)
+    p = run(["render", "task=two-groups-cross", "budget=tiny", "episode=1", "render.every=2"], tmp_path)
+    out = tmp_path / "two-groups-cross/tiny/seed0/render/prog-retrained-k2-lam0.5-v1"
+    from PIL import Image
+
+    assert Image.open(out / "episode1.gif").n_frames == 5  # tiny horizon 8: steps 0, 2, 4, 6, 8
+    assert (out / "episode1.png").stat().st_size > 5000 and "rendered" in p.stdout
+    run(["render", "task=two-groups-cross", "budget=tiny", "baseline=tf-full"], tmp_path)
+    assert (tmp_path / "two-groups-cross/tiny/seed0/render/tf-full/episode0.gif").exists()
+    p = run(["figures", "task=two-groups-cross", "budget=tiny", "render.agent=3"], tmp_path)
+    figs = tmp_path / "two-groups-cross/tiny/seed0/figures"
+    for name in ("attention-episode0.png", "trajectories.png", "figure1.png", "rules-episode0.png"):
+        assert (figs / name).stat().st_size > 5000, name
+    # bad values are one line each
+    for args, needle in ((["render.format=avi"], "render.format must be gif or mp4"),
+                         (["render.round=2"], "has 1 round(s)"),
+                         (["episode=-1"], "episode must be >= 0")):
+        p = run(["render", "task=two-groups-cross", "budget=tiny", *args], tmp_path, check=False)
+        assert p.returncode != 0 and needle in p.stderr and "Traceback" not in p.stderr, p.stderr
+    p = run(["render", "task=two-groups-cross", "budget=tiny", "baseline=no-comm"], tmp_path, check=False)
+    assert p.returncode != 0 and "neurosym train" in p.stderr  # names the command that makes the model
+
+
+def test_figures_need_a_trained_run(tmp_path):
+    p = run(["figures", "task=random-grid", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode != 0 and "neurosym pipeline task=random-grid budget=tiny" in p.stderr
