@@ -63,6 +63,13 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         timings[stage.name] = round(took if stage.verb == "eval" else max(took, timings.get(stage.name, 0.0)), 1)
         write_json(timing_file, timings)
     print_table(cfg)
+    from ..config import UserError
+    from .render import make_figures
+
+    try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
+        make_figures(cfg, info)
+    except UserError as e:
+        log.warning("figures not drawn: %s", e)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
         f"seed {cfg.seed}) in {clock(time.perf_counter() - t0)}")
     return results

@@ -68,7 +68,7 @@ def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, 
         try:
             rec, _ = record(b, episode)
         except UserError as e:
-            log.warning("figures: no %s here (%s)", name, e)
+            log.info("figures: no %s here, drawn without it (%s)", name, e)
             continue
         out.append((paths.baseline_label(b), rec))
     return out
@@ -116,9 +116,10 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
         if full and prog:
             made["figure1"] = str(fig.figure1(full[0], prog[0], out / "figure1.png",
                                               f"{head}: Figure 1, episode {settings[0]}"))
-    prog_cfg = _with_baseline(cfg, "prog-retrained")
-    prog = _records(cfg, ["prog-retrained"], cfg.episode)
+    # the program's rules, drawn on the episode of the retrained model (else of the oracle under the program)
+    prog = _records(cfg, ["prog-retrained"], cfg.episode) or _records(cfg, ["prog"], cfg.episode)
     if prog:
+        prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
         label, rec = prog[0]
         program = baseline_comm(prog_cfg).program  # type: ignore[attr-defined]
         agent = min(cfg.render.agent, rec.n_agents - 1)

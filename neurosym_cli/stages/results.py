@@ -152,4 +152,7 @@ def report(cfg: RunConfig) -> dict:
         log.warning("report files not written (%s); the table above is the report", e)
         return {"report": None}
     console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}" + (f", {curves}" if curves else ""))
+    figures = sorted(root.glob("seed*/figures/*.png")) or sorted(root.glob("figures/*.png"))
+    if figures:  # drawn per training seed by the pipeline or `neurosym figures`
+        console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
     return {"report": str(root / "report.json")}

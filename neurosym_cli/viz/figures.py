@@ -222,8 +222,12 @@ def rule_regions(program: Program, kind: str, features: str, rec: EpisodeRecord,
 
             ax.imshow(np.where(keep, 1.0, np.nan), origin="lower", extent=extent, aspect="equal",
                       cmap=ListedColormap([color]), alpha=0.25, interpolation="nearest")
+        ax.scatter(rec.goal[:, 0], rec.goal[:, 1], marker="x", s=12, c="#999999", lw=0.7, zorder=2, label="goals")
         ax.scatter(rec.pos[step, others, 0], rec.pos[step, others, 1], s=10, c="#555555", zorder=3,
                    label="other agents")
+        if not keep.any():  # a guard on the agent's own state that fails, or a filter nobody here could pass
+            ax.text(0.5, 0.5, "no agent anywhere passes the filter:\nthis rule asks nobody now", ha="center",
+                    va="center", transform=ax.transAxes, fontsize=8, color=color)
         ax.scatter(*rec.pos[step, agent], marker="*", s=140, c=color, edgecolors="black", lw=0.6, zorder=4,
                    label=f"asking agent {agent}")
         if rec.picks is not None:
