@@ -203,7 +203,7 @@ def test_every_feature_reads_with_its_subject(kind, goals, version):
     ("argmax(map(-1.0*d, filter(d >= 1.29 or theta <= -0.34, l)))",
      "ask the nearest agent for which its distance is at least 1.29 or its bearing (rad) is at most -0.34"),
     ("random(filter(g3d >= 2.0, l))",
-     "while my distance to my goal 3 (by initial distance) is at least 2, ask a random agent; otherwise ask nobody"),
+     "while my distance to my goal 3 (by initial distance) is at least 2.0, ask a random agent; otherwise ask nobody"),
 ])
 def test_hand_written_readings(text, reading):
     p = parse(text)

@@ -135,6 +135,12 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
     assert (out / "episode1.png").stat().st_size > 5000 and "rendered" in p.stdout
     run(["render", "task=two-groups-cross", "budget=tiny", "baseline=tf-full"], tmp_path)
     assert (tmp_path / "two-groups-cross/tiny/seed0/render/tf-full/episode0.gif").exists()
+    p = run(["show-program", "task=two-groups-cross", "budget=tiny"], tmp_path)
+    assert "fires" in p.stdout and "if removed" in p.stdout and "%" in p.stdout  # rule statistics from summary
+    summary = json.loads((tmp_path / "two-groups-cross/tiny/seed0/synth/k2-lam0.5-v1/summary.json").read_text())
+    stats = summary["rounds"][0]["rule_stats"]
+    assert len(stats) == len(summary["program"].strip().splitlines())
+    assert all(0.0 <= s["fires"] <= 1.0 and 0.0 <= s["edge_share"] <= 1.0 for s in stats)
     p = run(["figures", "task=two-groups-cross", "budget=tiny", "render.agent=3"], tmp_path)
     figs = tmp_path / "two-groups-cross/tiny/seed0/figures"
     for name in ("attention-episode0.png", "trajectories.png", "figure1.png", "rules-episode0.png"):

@@ -297,3 +297,72 @@ def test_every_rule_the_search_proposes_compiles_for_the_kernels(kind, goals, ve
                 assert kernels.rule_spec(r, pair, agent) is not None, r
                 if not own_scores and isinstance(r, ArgMaxRule):
                     assert not all(agent_level(n) for n, _ in r.score.terms), r
+
+
+def _planted_scorer(lam=0.0):
+    """The planted-program fixture: targets made by the transformer hearing only the nearest agent."""
+    from neurosym_cli.envs.features import PairFeatures
+
+    env, pol, data = _setup(rollouts=4)
+    planted = ArgMaxRule(Linear((("d", -1.0),)), TrueCond())
+    planted_data = []
+    for b in data:
+        feats = PairFeatures("formation", b.agent, b.rel, "v1")
+        with torch.no_grad():
+            out = pol(Observation(b.agent, b.rel),
+                      lambda logits, r: picks_to_mask(rule_picks(planted, feats, None)[..., None], b.n_agents))
+        planted_data.append(DataBucket(b.agent, b.rel, env.effective_action(out.action)))
+    return planted, CachedScorer(pol, env, "formation", planted_data, 0, "v1", lam, "paper", 3, 1,
+                                 torch.Generator().manual_seed(0), CPU)
+
+
+def test_never_holds_finds_contradictions():
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.synth.simplify import never_holds
+
+    def c(text):
+        return parse(f"random(filter({text}, l))").rounds[0][0].cond
+
+    assert never_holds(c("d >= 3.0 and d <= 2.0"))
+    assert never_holds(c("d <= -1.0"))  # a distance is never negative
+    assert never_holds(c("theta >= 4.0"))  # an angle is at most pi
+    assert never_holds(c("dx >= 1.0 and gd >= 0.5 and dx <= 0.0"))
+    assert not never_holds(c("d >= 2.0 and d <= 3.0"))
+    assert not never_holds(c("d >= 3.0 and d <= 2.0 or dx >= 0.0"))
+    assert never_holds(c("d >= 3.0 and d <= 2.0 or theta <= -4.0"))
+
+
+def test_rule_statistics_on_a_hand_built_program():
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.synth.simplify import rule_stats
+
+    planted, sc = _planted_scorer()
+    rules = (planted,) + parse("random(filter(d <= -1.0, l))\nargmax(map(-1.0*d, filter(true, l)))\n").rounds[0]
+    stats = rule_stats(sc, rules)
+    assert [s["fires"] for s in stats] == [1.0, 0.0, 1.0]
+    assert stats[0]["edge_share"] == 1.0 and stats[2]["edge_share"] == 0.0  # rule 3 repeats rule 1's picks
+    assert "always fires" in stats[0]["flags"] and "never fires" in stats[1]["flags"]
+    assert any("can never hold" in f for f in stats[1]["flags"])
+    assert stats[1]["removal_delta"] == pytest.approx(0.0, abs=1e-9)  # it does nothing
+    assert stats[2]["removal_delta"] == pytest.approx(0.0, abs=1e-9)  # its edges are rule 1's
+    assert stats[0]["removal_delta"] == pytest.approx(0.0, abs=1e-9)  # ... and rule 3 would take them over
+
+
+def test_simplification_keeps_the_objective_on_the_planted_program():
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.dsl.printer import rule_text
+    from neurosym_cli.synth.simplify import simplify
+
+    planted, sc = _planted_scorer(lam=0.5)
+    noisy = parse("argmax(map(-1.0*d, filter(d >= 0.0 and d <= -1.0 or dx <= 1000.0, l)))\n"
+                  "random(filter(d <= -1.0, l))\n").rounds[0]
+    before = sc.score(noisy)
+    simple, done = simplify(sc, noisy)
+    after = sc.score(simple)
+    assert after.total <= before.total + 1e-9
+    assert [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(dx <= 1000.0, l)))"] or \
+        [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(true, l)))"]
+    assert sc.score(simple).l1 == pytest.approx(sc.score((planted,)).l1, abs=1e-6)
+    assert any("can never hold" in line for line in done) and any("never fires" in line for line in done)
+    # a program with nothing to drop comes back unchanged
+    assert simplify(sc, (planted,)) == ((planted,), [])

@@ -92,7 +92,8 @@ def _own(c: Cond) -> bool | None:
 
 
 def _num(x: float) -> str:
-    return f"{x:.4g}"  # thresholds of the search sit on a 0.01 grid: 7.46, 12.85, -2.78
+    """A threshold as the rule prints it (the same digits in the rule and in its reading)."""
+    return fmt_float(x)
 
 
 def _test_words(t: Test) -> str:

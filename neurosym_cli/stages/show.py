@@ -27,19 +27,44 @@ def _features(rule) -> str:
     return "; ".join(parts) or "none"
 
 
+def _stats(info, n_rules: int) -> list[dict] | None:
+    """The rule statistics of a summary's round, when they are there and fit the program's rules."""
+    stats = info.get("rule_stats") if isinstance(info, dict) else None
+    ok = isinstance(stats, list) and len(stats) == n_rules and all(
+        isinstance(x, dict) and {"fires", "edge_share", "removal_delta", "flags"} <= set(x) for x in stats)
+    return stats if ok else None
+
+
 def render(program: Program, rounds: list[dict] | None, lam: float | None, title: str = "program") -> None:
     """Print each rule in the paper's notation beside its reading, and the objective terms when known."""
     for r, rules in enumerate(program.rounds):
         t = Table(show_header=True, header_style="bold", expand=False,
                   caption="[cyan]my[/]: the asking agent's own state, the same for every candidate (a guard, or a "
                           "score that ties); [magenta]its[/]: the other agent as the asking agent observes it")
+        info = rounds[r] if rounds and r < len(rounds) else None
+        stats = _stats(info, len(rules))
         t.add_column("#", justify="right")
         t.add_column("rule (paper notation)")
         t.add_column("features read")
         t.add_column("reading")
+        if stats:
+            t.add_column("fires", justify="right")
+            t.add_column("edges", justify="right")
+            t.add_column("Δ objective\nif removed", justify="right")
         for k, rule in enumerate(rules, start=1):
-            t.add_row(str(k), rule_text(rule), _features(rule), describe(rule))
-        info = rounds[r] if rounds and r < len(rounds) else None
+            row = [str(k), rule_text(rule), _features(rule), describe(rule)]
+            if stats:
+                st = stats[k - 1]
+                flags = "".join(f"\n[yellow]{f}[/]" for f in st["flags"])
+                row[3] += flags
+                delta = st["removal_delta"]
+                row += [f"{100 * st['fires']:.0f}%", f"{100 * st['edge_share']:.0f}%",
+                        "-" if delta != delta else f"{delta:+.4f}"]
+            t.add_row(*row)
+        if stats:
+            t.caption += ("\nfires: share of (state, agent) of the synthesis dataset where the rule picks somebody; "
+                          "edges: its share of the program's edges; Δ objective: the objective without the rule "
+                          "minus with it (positive: the rule helps)")
         sub = ""
         if isinstance(info, dict) and lam is not None:
             try:
@@ -49,6 +74,8 @@ def render(program: Program, rounds: list[dict] | None, lam: float | None, title
                 sub = ""  # a summary of another shape: the rules are still worth showing
         name = f"{title}, round {r + 1}" if program.n_rounds > 1 else title
         console.print(Panel(t, title=name, subtitle=sub or None, expand=False))
+        for line in (info or {}).get("simplified", []) if isinstance(info, dict) else []:
+            console.print(f"[dim]simplified after the search:[/] {line}")
 
 
 def show_program(cfg: RunConfig) -> dict:

@@ -15,6 +15,7 @@ from ..envs import make_env
 from ..synth.dataset import DataBucket, load_or_collect
 from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
+from ..synth.simplify import rule_stats, simplify
 from ..utils.console import SearchDisplay, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
@@ -89,6 +90,12 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
                                on_step)
         disp.summary(res)
+        simple, dropped = simplify(scorer, res.best)
+        if dropped:  # the same objective (or better) with less text: what a reader gets
+            res.best, res.best_score = simple, scorer.score(simple)
+            for line in dropped:
+                log.info("simplified: %s", line)
+        stats = rule_stats(scorer, res.best)
         full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
         results.append(res)
         trace += [{"round": r + 1, **row} for row in res.trace]
@@ -97,7 +104,8 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                        "proposals_per_second": res.proposals_per_second, "acceptance": res.acceptance(),
                        "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
                        "backend": "numba" if scorer.compiled else "torch",
-                       "full_forward_check": None if full is None else full.total})
+                       "full_forward_check": None if full is None else full.total,
+                       "simplified": dropped, "rule_stats": stats})
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
