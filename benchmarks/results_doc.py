@@ -3,6 +3,7 @@
     python benchmarks/results_doc.py --collect   # outputs/ (the paper protocol's artifacts) -> docs/results/*.json
     python benchmarks/results_doc.py             # docs/results/*.json + the template -> docs/results.md
     python benchmarks/results_doc.py --check     # exit 1 when docs/results.md is not what the files give
+    python benchmarks/results_doc.py --figures   # also redraw the Figure-2 pictures from the result files
 
 Every number of the document comes from the result files: one per variant of the protocol (a task, with the
 lambda and objective of its programs), holding each baseline's summary (mean and std over the evaluation seeds),
@@ -29,7 +30,6 @@ import argparse
 import json
 import math
 import re
-import shutil
 import sys
 from pathlib import Path
 
@@ -59,6 +59,22 @@ FORMATION = ("random-cross", "random-grid")
 
 
 # ------------------------------------------------------------------------------------------------ collect
+def draw_figures() -> None:
+    """docs/figures/<task>.png (the paper's Figure 2 with a loss-vs-degree panel) from the result files alone."""
+    from neurosym_cli.plotting import figure2
+
+    for task in VARIANTS:
+        f = RESULTS / f"{task}.json"
+        if VARIANTS[task][0] != task or not f.exists():
+            continue  # one figure per task, from its main variant
+        r = json.loads(f.read_text())
+        rows = [(r["baselines"][b]["label"], r["baselines"][b]["summary"]) for b in ORDER if b in r["baselines"]]
+        title = f"{task} (paper budget, train seed 0): mean ± std over {r['seeds']} eval seeds"
+        (DOCS / "figures").mkdir(exist_ok=True)
+        figure2(rows, title.replace(": ", ":\n"), DOCS / "figures" / f"{task}.png")
+        print(f"drew {DOCS / 'figures' / (task + '.png')}")
+
+
 def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
     """The artifacts of the paper protocol under ``root`` -> one small JSON file per variant, run.json, figures."""
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -89,10 +105,6 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
         timing = exp / "pipeline_timings.json"
         if name == task and timing.exists():
             out["timings"] = json.loads(timing.read_text())
-            fig = exp / "eval" / "figure2.png"
-            if fig.exists():
-                (DOCS / "figures").mkdir(exist_ok=True)
-                shutil.copyfile(fig, DOCS / "figures" / f"{task}.png")
         (RESULTS / f"{name}.json").write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
         print(f"wrote {RESULTS / (name + '.json')}: {len(out['baselines'])} baselines")
     logs = root / "logs" / "paper"
@@ -295,9 +307,12 @@ def main() -> None:
     ap.add_argument("--collect", action="store_true", help="first write docs/results/ from the artifacts")
     ap.add_argument("--root", default=str(ROOT / "outputs"), help="runs root of the paper protocol's artifacts")
     ap.add_argument("--check", action="store_true", help="exit 1 if docs/results.md differs from the render")
+    ap.add_argument("--figures", action="store_true", help="also redraw docs/figures/<task>.png from docs/results/")
     a = ap.parse_args()
     if a.collect:
         collect(Path(a.root))
+    if a.collect or a.figures:
+        draw_figures()
     text = render(TEMPLATE.read_text(), *load())
     target = DOCS / "results.md"
     if a.check:
