@@ -223,3 +223,31 @@ def test_tiny_training_summary_says_what_it_averaged(tmp_path):
 def test_readme_documents_the_cluster_extra():
     readme = (ROOT / "README.md").read_text()
     assert 'pip install -e ".[cluster]"' in readme and "hydra/launcher=slurm" in readme and "logger=tensorboard" in readme
+
+
+# --- sweep ergonomics -------------------------------------------------------------------------------------------
+
+def test_a_sweep_job_with_a_missing_upstream_fails_alone(tmp_path):
+    run(["train", "budget=tiny", "task=random-grid"], tmp_path)  # seed 0's oracle only
+    p = run(["synth", "-m", "seed=0,1", "budget=tiny", "task=random-grid"], tmp_path, check=False)
+    assert p.returncode == 1  # a failed job fails the command ...
+    assert (tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt").exists()  # ... not the others
+    out = p.stdout + p.stderr
+    assert "Traceback" not in out
+    assert "[seed=1] neurosym synth: error: no checkpoint" in out and "neurosym train task=random-grid" in out
+    assert "sweep of synth: 2 jobs" in out and "1 of 2 jobs failed" in out
+    results = sorted((tmp_path / "multirun/synth").glob("*/*/job_result.json"))
+    outcome = {json.loads(f.read_text())["job"]: json.loads(f.read_text()) for f in results}
+    assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "degree"}
+    assert not outcome[1]["ok"] and "no checkpoint" in outcome[1]["error"]
+
+
+def test_sweep_comparison_table_of_a_successful_sweep(tmp_path):
+    run(["train", "budget=tiny", "task=random-grid"], tmp_path)
+    p = run(["synth", "-m", "lam=0.3,0.7", "budget=tiny", "task=random-grid"], tmp_path)
+    assert "sweep of synth: 2 jobs" in p.stdout and "failed" not in p.stdout
+    for lam in ("lam=0.3", "lam=0.7"):
+        assert lam in p.stdout
+    # a job whose config is invalid fails alone too (rules must stay below the team size)
+    p = run(["synth", "-m", "rules=2,99", "budget=tiny", "task=random-grid"], tmp_path, check=False)
+    assert p.returncode == 1 and "rules=99" in p.stdout and "1 of 2 jobs failed" in p.stdout

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 from typing import Any, Callable
 
 from hydra.core.hydra_config import HydraConfig
@@ -48,29 +49,59 @@ def job_prefix(overrides: list[str], num: int) -> str:
     return " ".join(picked) if picked else f"job {num}"
 
 
+def _row(result: Any) -> dict[str, Any]:
+    """The numbers of a verb's result worth a column in a sweep's comparison table."""
+    if not isinstance(result, dict):
+        return {}
+    if isinstance(result.get("cost"), dict):  # eval: the summary of every metric
+        return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in-deg", "max_in"),
+                                                     ("max out-deg", "max_out")) if isinstance(result.get(m), dict)}
+    keep = {k: v for k, v in result.items() if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
+    if all(":" in str(k) for k in result) and result:  # pipeline: one entry per stage
+        keep["stages"] = len(result)
+    return keep
+
+
 def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
-    """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback."""
-    try:
-        typed: RunConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
-    except UserError as e:
-        _error(name, str(e))
-    except OmegaConfBaseException as e:
-        _error(name, str(e).splitlines()[0])
-    _plain_logs_off_terminal()
+    """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback.
+
+    Inside a multirun a job's bad input fails that job alone: its line is printed, its outcome written to
+    job_result.json in its Hydra directory, and the other jobs run; the sweep's summary (``sweep.py``) lists
+    every job and exits non-zero when one failed."""
     hc = HydraConfig.get()
-    if hc.mode == RunMode.MULTIRUN:  # parallel jobs' lines interleave: each names its own overrides
+    sweep = hc.mode == RunMode.MULTIRUN
+    _plain_logs_off_terminal()
+    if sweep:  # parallel jobs' lines interleave: each names its own overrides
         from ..utils.console import set_job_prefix
 
         set_job_prefix(job_prefix(list(hc.overrides.task), hc.job.num))
-    info = RunInfo(OmegaConf.to_container(cfg, resolve=True), hc.mode == RunMode.MULTIRUN,  # type: ignore[arg-type]
-                   hc.runtime.output_dir)
-    if typed.threads:
-        import torch  # only here: show-program must not pay for importing torch
-
-        torch.set_num_threads(typed.threads)
+    record = Path(hc.runtime.output_dir) / "job_result.json"
+    overrides = list(hc.overrides.task)
     try:
-        return fn(typed, info)
+        try:
+            typed: RunConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
+        except OmegaConfBaseException as e:
+            raise UserError(str(e).splitlines()[0]) from None
+        info = RunInfo(OmegaConf.to_container(cfg, resolve=True), sweep,  # type: ignore[arg-type]
+                       hc.runtime.output_dir)
+        if typed.threads:
+            import torch  # only here: show-program must not pay for importing torch
+
+            torch.set_num_threads(typed.threads)
+        result = fn(typed, info)
     except UserError as e:
-        _error(name, str(e))
+        if not sweep:
+            _error(name, str(e))
+        from ..utils.console import say
+        from ..utils.io import write_json
+
+        say(f"[red]neurosym {name.replace('_', '-')}: error:[/] {e} (this job only; the sweep goes on)")
+        write_json(record, {"ok": False, "job": hc.job.num, "overrides": overrides, "error": str(e)})
+        return None
     except KeyboardInterrupt:
         _error(name, "interrupted; artifacts written so far are intact, re-run the same command to resume", 130)
+    if sweep:
+        from ..utils.io import write_json
+
+        write_json(record, {"ok": True, "job": hc.job.num, "overrides": overrides, "row": _row(result)})
+    return result

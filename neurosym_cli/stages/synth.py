@@ -8,7 +8,7 @@ from pathlib import Path
 import torch
 
 from .. import __version__, artifacts, paths
-from ..config import ConfigError, RunConfig
+from ..config import ConfigError, RunConfig, UserError
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
 from ..envs import make_env
@@ -21,7 +21,7 @@ from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.tracking import open_tracker
 from ..dsl.files import load_program, save_program
-from ..utils.io import write_csv, write_json
+from ..utils.io import read_json, write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
 from .comm import baseline_comm
@@ -49,9 +49,18 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
         else:
             baseline_comm(cfg)  # the same check for a tree
         log.info("already synthesized: %s (overwrite=true searches again)", result)
-        return {"program": str(result)}
+        return {"program": str(result), **_terms(out / "summary.json")}
     with run_lock(out):
         return _synthesize_locked(cfg, info, out)
+
+
+def _terms(summary: Path) -> dict:
+    """The objective terms a finished search recorded (summed over rounds), or nothing when unreadable."""
+    try:
+        rounds = read_json(summary)["rounds"]
+        return {k: sum(float(x[k]) for x in rounds) for k in ("objective", "l1", "degree")}
+    except (UserError, KeyError, TypeError, ValueError):
+        return {}  # a tree's summary, or one of another shape: the program itself was checked above
 
 
 def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
@@ -123,7 +132,8 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     say(f"[green]synthesized[/] {out / 'program.txt'}")
     if not info.multirun:
         render(program, rounds, cfg.lam)
-    return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds)}
+    return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds),
+            "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
 
 
 def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out: Path) -> dict:
