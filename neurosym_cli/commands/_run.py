@@ -56,7 +56,8 @@ def _row(result: Any) -> dict[str, Any]:
     if isinstance(result.get("cost"), dict):  # eval: the summary of every metric
         return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in-deg", "max_in"),
                                                      ("max out-deg", "max_out")) if isinstance(result.get(m), dict)}
-    keep = {k: v for k, v in result.items() if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
+    keep = {k: v for k, v in result.items()
+            if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
     if all(":" in str(k) for k in result) and result:  # pipeline: one entry per stage
         keep["stages"] = len(result)
     return keep

@@ -146,7 +146,8 @@ def report(cfg: RunConfig) -> dict:
         write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
                                                                for x in ("mean", "std")}} for label, s in rows])
         png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
-        curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed" + ("s" if len(seeds) > 1 else ""),
+        plural = "s" if len(seeds) > 1 else ""
+        curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed{plural}",
                               root / "report_curves.png")
     except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
         log.warning("report files not written (%s); the table above is the report", e)
