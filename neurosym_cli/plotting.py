@@ -15,6 +15,36 @@ def baseline_of(label: str) -> str:
     return max(names, key=len) if names else label
 
 
+def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsize: float = 7) -> None:
+    """Label each point (xs[k], ys[k]) right of it; labels that would overprint another label or marker are moved
+    up, with a leader line to their point. Call after the axes limits are final."""
+    import numpy as np
+
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    gap, placed = 0.045 * (y1 - y0), []  # placed: (x, label y, label width) of the labels so far
+
+    def clash(k: int, w: float, ly: float) -> float | None:
+        """The y of a label or another marker that point k's label [x, x + w] at height ly would overprint."""
+        x = xs[k]
+        boxes = placed + [(px, py, 0.0) for i, (px, py) in enumerate(zip(xs, ys)) if i != k]
+        hits = [py for px, py, pw in boxes if px - 0.02 * (x1 - x0) <= x + w and x <= px + pw + 0.02 * (x1 - x0)
+                and abs(ly - py) < gap]
+        return max(hits) if hits else None
+
+    for k in np.argsort(ys):
+        w = (0.03 + 0.0019 * fontsize * len(names[k])) * (x1 - x0)  # characters of this size on a ~5 inch panel
+        ly = ys[k]
+        for _ in range(len(names)):
+            hit = clash(k, w, ly)
+            if hit is None:
+                break
+            ly = max(ly, hit) + gap
+        placed.append((xs[k], ly, w))
+        ax.annotate(names[k], (xs[k], ys[k]), xytext=(xs[k] + 0.03 * (x1 - x0), ly), fontsize=fontsize,
+                    color=colors[k], va="center",
+                    arrowprops={"arrowstyle": "-", "color": colors[k], "lw": 0.5} if ly != ys[k] else None)
+
+
 def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title: str, path: Path) -> Path:
     """The paper's Figure 2, one panel more: rows (baseline label, summary with mean/std of cost, max_in, max_out)
     -> PNG with (a) loss per baseline, (b) max in- and out-degree per baseline, tf-full's drawn as what it is
@@ -55,32 +85,9 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     for col, x, xe, l, le in zip(colors, xs, get("max_in", "std"), ls, get("cost", "std")):
         c.errorbar(x, l, xerr=xe, yerr=le, fmt="o", color=col, ms=6, capsize=2)
     c.margins(x=0.25, y=0.12)
-    (x0, x1), (y0, y1) = c.get_xlim(), c.get_ylim()
-    x0 = max(x0, -0.06 * x1)  # a degree is never negative: no axis to the left of zero beyond the markers
-    c.set_xlim(x0, x1)
-    # labels of points that nearly coincide are spread upwards, with a leader line, instead of overprinted
-    gap, placed = 0.045 * (y1 - y0), []  # placed: (x, label y, label width) of the labels so far
-
-    def clash(k: int, w: float, ly: float) -> float | None:
-        """The y of a label or another marker that point k's label [x, x + w] at height ly would overprint."""
-        x = xs[k]
-        boxes = placed + [(px, pl, 0.0) for i, (px, pl) in enumerate(zip(xs, ls)) if i != k]
-        hits = [py for px, py, pw in boxes if px - 0.02 * (x1 - x0) <= x + w and x <= px + pw + 0.02 * (x1 - x0)
-                and abs(ly - py) < gap]
-        return max(hits) if hits else None
-
-    for k in np.argsort(ls):
-        w = (0.03 + 0.013 * len(baseline_of(labels[k]))) * (x1 - x0)  # about 7-point characters on this panel
-        ly = ls[k]
-        for _ in range(len(labels)):
-            hit = clash(k, w, ly)
-            if hit is None:
-                break
-            ly = max(ly, hit) + gap
-        placed.append((xs[k], ly, w))
-        c.annotate(baseline_of(labels[k]), (xs[k], ls[k]), xytext=(xs[k] + 0.03 * (x1 - x0), ly), fontsize=7,
-                   color=colors[k], va="center",
-                   arrowprops={"arrowstyle": "-", "color": colors[k], "lw": 0.5} if ly != ls[k] else None)
+    x0, x1 = c.get_xlim()
+    c.set_xlim(max(x0, -0.06 * x1), x1)  # a degree is never negative: no axis left of zero beyond the markers
+    place_labels(c, xs, ls, [baseline_of(lbl) for lbl in labels], colors)
     c.set_xlabel("max in-degree (whom an agent hears)", fontsize=8)
     c.set_ylabel("loss", fontsize=8)
     c.set_title("(c) loss against degree: lower left is better", fontsize=9)
@@ -159,6 +166,53 @@ def training_curves(runs: Sequence[tuple[str, str, bool, Sequence[Sequence[tuple
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp.png")
     fig.savefig(tmp)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int], ref: tuple[float, float],
+                area: float, title: str, path: Path) -> Path:
+    """Loss against max degree of every evaluated baseline or program (label, degree, loss), the non-dominated
+    ones joined as a staircase and ringed, and the area they dominate up to the reference point shaded."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.2, 5.0), dpi=120)
+    f = sorted((points[i][1], points[i][2]) for i in front)
+    stairs_x, stairs_y = [f[0][0]], [ref[1]]
+    for k, (x, y) in enumerate(f):
+        stairs_x += [x, x]
+        stairs_y += [stairs_y[-1], y]
+        if k + 1 < len(f):
+            stairs_x.append(f[k + 1][0])
+            stairs_y.append(y)
+    stairs_x.append(ref[0])
+    stairs_y.append(f[-1][1])
+    ax.fill_between(stairs_x, stairs_y, ref[1], step=None, color="#59a14f", alpha=0.12, lw=0,
+                    label=f"dominated area {area:.4g} (up to the reference point)")
+    ax.plot(stairs_x, stairs_y, color="#59a14f", lw=1.2)
+    cols = [color(baseline_of(label)) for label, _, _ in points]
+    for k, (label, x, y) in enumerate(points):
+        ax.scatter(x, y, s=30, color=cols[k], zorder=3)
+        if k in front:
+            ax.scatter(x, y, s=110, facecolors="none", edgecolors="black", lw=1.0, zorder=4)
+    ax.scatter(*ref, marker="+", s=80, color="black", label=f"reference point ({ref[0]:.3g}, {ref[1]:.4g})")
+    ax.scatter([], [], s=110, facecolors="none", edgecolors="black", label="non-dominated (ringed)")
+    ax.set_xlabel("max degree (in + out, the paper's deg; mean over episodes and seeds)", fontsize=8)
+    ax.set_ylabel("loss (lower is better)", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, lw=0.5)
+    ax.margins(x=0.12, y=0.08)
+    place_labels(ax, [p[1] for p in points], [p[2] for p in points], [p[0] for p in points], cols, 6.5)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
+    ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    fig.savefig(tmp, bbox_inches="tight")
     plt.close(fig)
     tmp.replace(path)
     return path

@@ -269,6 +269,9 @@ def test_per_seed_pipelines_and_report(tmp_path):
     assert rep["baselines"]["tf-full"]["cost"]["train_seeds"] == 2
     assert (tmp_path / "random-grid/tiny/report.png").stat().st_size > 1000
     assert (tmp_path / "random-grid/tiny/report_curves.png").stat().st_size > 1000  # training curves
+    pareto = (tmp_path / "random-grid/tiny/pareto.csv").read_text().splitlines()
+    assert pareto[0].startswith("label,max_degree,loss,non_dominated") and len(pareto) == 3
+    assert (tmp_path / "random-grid/tiny/pareto.png").stat().st_size > 1000
     assert (tmp_path / "random-grid/tiny/report.csv").read_text().startswith("baseline,cost_mean,cost_std")
     p = run(["report", "task=random-cross", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym pipeline task=random-cross" in p.stderr

@@ -252,3 +252,17 @@ def test_sweep_comparison_table_of_a_successful_sweep(tmp_path):
     # a job whose config is invalid fails alone too (rules must stay below the team size)
     p = run(["synth", "-m", "rules=2,99", "budget=tiny", "task=random-grid"], tmp_path, check=False)
     assert p.returncode == 1 and "rules=99" in p.stdout and "1 of 2 jobs failed" in p.stdout
+
+
+# --- Pareto front of a report ------------------------------------------------------------------------------------
+
+def test_pareto_front_and_dominated_area_of_a_hand_made_set():
+    from neurosym_cli.utils.pareto import dominated_area, pareto_front
+
+    pts = [(1, 5), (2, 3), (3, 4), (4, 1), (2, 3), (5, 5), (4, 2)]
+    assert pareto_front(pts) == [0, 1, 4, 3]  # (3, 4), (5, 5) and (4, 2) are dominated; equal points both stay
+    # union of [x, 6] x [y, 6] over the front: 1 x 1 + 2 x 3 + 2 x 5
+    assert dominated_area([pts[i] for i in pareto_front(pts)], (6, 6)) == pytest.approx(17.0)
+    assert dominated_area(pts, (6, 6)) == pytest.approx(17.0)  # dominated points add nothing
+    assert dominated_area([(7, 1)], (6, 6)) == 0.0  # beyond the reference
+    assert pareto_front([(0, 0)]) == [0]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import baselines
 from ..config import RunConfig
-from ..plotting import figure2, training_curves
+from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -106,6 +106,27 @@ def write_curves(root: Path, head: str, path: Path) -> Path | None:
     return training_curves(runs, head, path) if runs else None
 
 
+def write_pareto(rows: Rows, root: Path, head: str) -> tuple[Path, Path]:
+    """pareto.csv and pareto.png: loss against max degree of every row, the non-dominated set, and the area it
+    dominates up to the reference point (1.05 x the largest degree and the largest loss found here)."""
+    from ..utils.pareto import dominated_area, pareto_front
+
+    pts = [(label, s["max_degree"]["mean"], s["cost"]["mean"]) for label, s in rows]
+    xy = [(x, y) for _, x, y in pts]
+    front = pareto_front(xy)
+    ref = (1.05 * max(x for x, _ in xy) + 1e-9, 1.05 * max(y for _, y in xy))
+    area = dominated_area([xy[i] for i in front], ref)
+    csv_path = root / "pareto.csv"
+    write_csv(csv_path, [{"label": label, "max_degree": x, "loss": y, "non_dominated": int(k in front),
+                          "ref_max_degree": ref[0], "ref_loss": ref[1], "dominated_area": area}
+                         for k, (label, x, y) in enumerate(pts)])
+    png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + "\nloss against degree: the lower "
+                      "left is better", root / "pareto.png")
+    log.info("non-dominated (loss, max degree): %s; dominated area %.4g up to %s",
+             ", ".join(pts[i][0] for i in front), area, tuple(round(v, 4) for v in ref))
+    return csv_path, png
+
+
 def title(cfg: RunConfig) -> str:
     return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
             f"mean ± std over {cfg.budget.eval_seeds} eval seeds")
@@ -146,13 +167,15 @@ def report(cfg: RunConfig) -> dict:
         write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
                                                                for x in ("mean", "std")}} for label, s in rows])
         png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
+        pareto_csv, pareto_png = write_pareto(rows, root, head)
         plural = "s" if len(seeds) > 1 else ""
         curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed{plural}",
                               root / "report_curves.png")
     except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
         log.warning("report files not written (%s); the table above is the report", e)
         return {"report": None}
-    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}" + (f", {curves}" if curves else ""))
+    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}, {pareto_csv}, {pareto_png}"
+                  + (f", {curves}" if curves else ""))
     figures = sorted(root.glob("seed*/figures/*.png")) or sorted(root.glob("figures/*.png"))
     if figures:  # drawn per training seed by the pipeline or `neurosym figures`
         console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
