@@ -92,9 +92,11 @@ class _Scene:
         else:
             label = "hears (opacity: attention weight)" if style == "weights" else "hears"
             handles.append(Line2D([], [], color=EDGE_COLOR, label=label))
-        ax.legend(handles=handles, fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=4,
-                  frameon=False)
-        self.fig.tight_layout(rect=(0, 0, 1, 0.97))
+        ncol = min(len(handles), 4)
+        rows = -(-len(handles) // ncol)
+        self.fig.legend(handles=handles, fontsize=6.5, loc="lower center", ncol=ncol, frameon=False)
+        height = self.fig.get_size_inches()[1]
+        self.fig.tight_layout(rect=(0, (0.08 + 0.16 * rows) / height, 1, 0.97))  # room for the legend's rows
         self.fig.canvas.draw()
         self.background = self.fig.canvas.copy_from_bbox(self.fig.bbox)  # everything that never moves
     def draw(self, t: int) -> None:
