@@ -122,6 +122,9 @@ def test_animation_frames_and_static_picture(tmp_path):
     if shutil.which("ffmpeg") is None:
         with pytest.raises(FileNotFoundError, match="ffmpeg"):
             animate(rec, tmp_path / "ep.mp4", "test", "rules")
+    else:  # MP4 through ffmpeg, where it is installed
+        mp4, n = animate(rec, tmp_path / "ep.mp4", "test", "rules", every=3)
+        assert n == 5 and mp4.stat().st_size > 1000 and mp4.read_bytes()[4:8] == b"ftyp"
 
 
 def test_render_and_figures_from_a_tiny_run(tmp_path):
