@@ -308,6 +308,9 @@ class SynthConfig:
     """samples of every random rule used to estimate the expected objective (common random numbers)"""
     max_depth: int = 2
     """filter depth: 1 = single tests, 2 = and/or of two tests"""
+    simplify: bool = True
+    """after the search, drop filter clauses and rules that do nothing on D when the objective stays the same
+    (synth/simplify.py); false keeps the searched program as found (docs/fidelity.md, 'Simplification')"""
     own_scores: bool = True
     """argmax scores may read the asking agent's own state (as the reference's search): such a score ties every
     candidate, so the pick falls to agent index order; false keeps scores to features of the other agent

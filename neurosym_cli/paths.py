@@ -49,6 +49,8 @@ def _search_variants(cfg: RunConfig) -> list[tuple[str, str]]:
         out.append((f"-{cfg.synth.objective}", f" synth.objective={cfg.synth.objective}"))
     if not cfg.synth.own_scores:
         out.append(("-otherscores", " synth.own_scores=false"))
+    if not cfg.synth.simplify:
+        out.append(("-unsimplified", " synth.simplify=false"))
     return out
 
 

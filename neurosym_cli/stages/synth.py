@@ -99,11 +99,14 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
                                on_step)
         disp.summary(res)
-        simple, dropped = simplify(scorer, res.best)
-        if dropped:  # the same objective (or better) with less text: what a reader gets
-            res.best, res.best_score = simple, scorer.score(simple)
+        searched = to_text(as_program([res]))
+        dropped: list[str] = []
+        if cfg.synth.simplify:
+            simple, dropped = simplify(scorer, res.best)
+            if simple != res.best:  # the same objective (or better) with less text: what a reader gets
+                res.best, res.best_score = simple, scorer.score(simple)
             for line in dropped:
-                log.info("simplified: %s", line)
+                log.info("simplify: %s", line)
         stats = rule_stats(scorer, res.best)
         full = scorer.full_score(as_program([res])) if cfg.task.rounds == 1 else None
         results.append(res)
@@ -114,7 +117,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                        "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
                        "backend": "numba" if scorer.compiled else "torch",
                        "full_forward_check": None if full is None else full.total,
-                       "simplified": dropped, "rule_stats": stats})
+                       "simplified": dropped, "searched_program": searched, "rule_stats": stats})
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]

@@ -136,7 +136,7 @@ def rule_stats(scorer: CachedScorer, rules: tuple[Rule, ...]) -> list[dict]:
 
 def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -> tuple[tuple[Rule, ...], list[str]]:
     """Drop clauses and rules that do nothing on D while the objective stays the same (or improves); returns
-    the simplified rules and one line per change made."""
+    the simplified rules and one line per change made (and per never-firing rule kept, with the reason)."""
     best = scorer.score(rules).total
     done: list[str] = []
     changed = True
@@ -161,17 +161,20 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
                     break
             if changed:
                 break
-        if changed:
+    # rules that never fire, from the last one: dropping a rule renumbers only the rules after it
+    for k in range(len(rules) - 1, -1, -1):
+        r = rules[k]
+        if len(rules) == 1 or not all(bool((p < 0).all()) for p in scorer.picks_of(r, k)):
             continue
-        for k, r in enumerate(rules):
-            picks = scorer.picks_of(r, k)
-            if len(rules) > 1 and all(bool((p < 0).all()) for p in picks):
-                cand = rules[:k] + rules[k + 1:]
-                new = scorer.score(cand).total
-                if new <= best + tol * max(1.0, abs(best)):
-                    done.append(f"rule {k + 1}: dropped `{rule_text(r)}` (never fires on D); "
-                                f"objective {best:.4f} -> {new:.4f}")
-                    rules, best, changed = cand, new, True
-                    break
+        cand = rules[:k] + rules[k + 1:]
+        new = scorer.score(cand).total
+        if new <= best + tol * max(1.0, abs(best)):
+            done.append(f"rule {k + 1}: dropped `{rule_text(r)}` (never fires on D); objective {best:.4f} -> "
+                        f"{new:.4f}")
+            rules, best = cand, new
+        else:
+            done.append(f"rule {k + 1}: kept `{rule_text(r)}` although it never fires on D: without it the random "
+                        f"rules after it draw other random numbers and the objective goes from {best:.4f} to "
+                        f"{new:.4f}")
     return rules, done
 
