@@ -37,8 +37,11 @@ def attention_panel(ax, rec: EpisodeRecord, step: int, round_: int, label: str):
     """One N x N map: row i = listener, column j = heard agent, colour = attention weight a_ij actually used."""
     order = _order(rec)
     a = rec.attn[step, round_][np.ix_(order, order)]
-    m = rec.mask[step, round_]
-    im = ax.imshow(a, cmap="magma_r", vmin=0.0, vmax=max(1e-6, float(a.max())), interpolation="nearest")
+    m = rec.mask[step, round_]  # in- and out-degrees do not depend on the order
+    im = ax.imshow(a, cmap="magma_r", vmin=0.0, vmax=1.0, interpolation="nearest")  # weights lie in [0, 1]
+    if not m.any():
+        ax.text(0.5, 0.5, "nobody hears anybody\nat this step", ha="center", va="center", transform=ax.transAxes,
+                fontsize=8, color="#555555")
     groups = rec.group[order]
     for k in np.nonzero(np.diff(groups))[0]:  # group boundaries
         ax.axhline(k + 0.5, color="#4e79a7", lw=0.8)
