@@ -26,6 +26,9 @@ EXAMPLES = """examples:
   neurosym retrain task=random-grid rules=2 lam=0.5
   neurosym eval task=random-grid baseline=prog-retrained rules=2
   neurosym train -m seed=0,1,2 hydra/launcher=joblib
+  neurosym pipeline -m seed=0,1,2 budget=paper hydra/launcher=slurm hydra.launcher.partition=cpu
+  neurosym render task=two-groups-cross episode=2   # an episode as a GIF and a PNG (render.format=mp4)
+  neurosym figures task=two-groups-cross            # attention maps, group paths, rule regions
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running
 """
