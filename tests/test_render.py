@@ -146,7 +146,8 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
     assert all(0.0 <= s["fires"] <= 1.0 and 0.0 <= s["edge_share"] <= 1.0 for s in stats)
     p = run(["figures", "task=two-groups-cross", "budget=tiny", "render.agent=3"], tmp_path)
     figs = tmp_path / "two-groups-cross/tiny/seed0/figures"
-    for name in ("attention-episode0.png", "trajectories.png", "figure1.png", "rules-episode0.png"):
+    for name in ("attention-k2-lam0.5-v1-episode0.png", "trajectories-k2-lam0.5-v1.png", "figure1-k2-lam0.5-v1.png",
+                 "rules-k2-lam0.5-v1-episode0.png"):
         assert (figs / name).stat().st_size > 5000, name
     # bad values are one line each
     for args, needle in ((["render.format=avi"], "render.format must be gif or mp4"),

@@ -86,7 +86,8 @@ def _setting_episodes(cfg: RunConfig) -> tuple[int, int] | None:
 
 
 def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
-    """`neurosym figures`: the paper's figures that this run directory has the models for, in <exp_dir>/figures/:
+    """`neurosym figures`: the paper's figures that this run directory has the models for, in <exp_dir>/figures/,
+    named after the program they show (k5-lam0.5-v1, ...):
     attention maps (render.baselines side by side, episode=, render.step=), trajectories of prog-retrained vs dist
     (formation tasks: the test episode with the most groups and one with a single group), Figure 1
     (two-groups-cross), rule regions of the program (render.agent=), Figure 5 (unlabeled-goals)."""
@@ -96,9 +97,10 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
     made: dict[str, str] = {}
     step = cfg.render.step
+    tag = paths.program_tag(_with_baseline(cfg, "prog"))  # the pictures of programs name the program they show
     recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
     if recs:
-        made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-episode{cfg.episode}.png",
+        made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-{tag}-episode{cfg.episode}.png",
                                                    f"{head}: attention at episode {cfg.episode}"))
     settings = _setting_episodes(cfg)
     if settings is not None:
@@ -109,12 +111,12 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
                 groups = len(set(pair[0][1].group.tolist()))
                 panels.append((f"episode {k}: {groups} group(s), N = {pair[0][1].n_agents}", pair))
         if panels:
-            made["trajectories"] = str(fig.trajectories(panels, out / "trajectories.png",
+            made["trajectories"] = str(fig.trajectories(panels, out / f"trajectories-{tag}.png",
                                                         f"{head}: group paths, prog-retrained solid, dist dashed"))
     if cfg.task.name == "two-groups-cross" and settings is not None:
         full, prog = _records(cfg, ["tf-full"], settings[0]), _records(cfg, ["prog-retrained"], settings[0])
         if full and prog:
-            made["figure1"] = str(fig.figure1(full[0], prog[0], out / "figure1.png",
+            made["figure1"] = str(fig.figure1(full[0], prog[0], out / f"figure1-{tag}.png",
                                               f"{head}: Figure 1, episode {settings[0]}"))
     # the program's rules, drawn on the episode of the retrained model (else of the oracle under the program)
     prog = _records(cfg, ["prog-retrained"], cfg.episode) or _records(cfg, ["prog"], cfg.episode)
@@ -124,12 +126,12 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
         program = baseline_comm(prog_cfg).program  # type: ignore[attr-defined]
         agent = min(cfg.render.agent, rec.n_agents - 1)
         for r in range(program.n_rounds):
-            name = f"rules-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
+            name = f"rules-{tag}-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
             made[f"rules{r + 1}"] = str(fig.rule_regions(
                 program, cfg.task.kind, cfg.features, rec, agent, min(step, rec.steps - 1), r, out / name,
                 f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
         if cfg.task.kind == "unlabeled":
-            made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-episode{cfg.episode}.png",
+            made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-{tag}-episode{cfg.episode}.png",
                                                       f"{head}: Figure 5, episode {cfg.episode}"))
     if not made:
         raise ArtifactError(f"no trained baselines to draw in {cfg.exp_dir}; run `neurosym pipeline "

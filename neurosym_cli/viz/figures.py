@@ -162,7 +162,8 @@ def unlabeled_scene(label: str, rec: EpisodeRecord, step: int, path: Path, title
     rounds = rec.mask.shape[1]
     fig, axes = plt.subplots(1, 1 + rounds, figsize=(4.6 * (1 + rounds), 4.4), dpi=110)
     _scene(axes[0], rec, group_mean=False)
-    axes[0].set_title(f"(a) {label}: starts (open), ends (filled), goals (x)", fontsize=8)
+    axes[0].set_title(f"(a) {label}: starts (open), ends (filled), goals (x)\nloss {rec.cost.mean():.3f} "
+                      f"(time-averaged), {rec.cost[-1]:.3f} at the last step", fontsize=8)
     for r in range(rounds):
         im = attention_panel(axes[1 + r], rec, min(step, rec.steps - 1), r, f"({chr(98 + r)}) round {r + 1}, "
                              f"step {step}")
