@@ -363,6 +363,22 @@ def test_simplification_keeps_the_objective_on_the_planted_program():
     assert [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(dx <= 1000.0, l)))"] or \
         [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(true, l)))"]
     assert sc.score(simple).l1 == pytest.approx(sc.score((planted,)).l1, abs=1e-6)
-    assert any("can never hold" in line for line in done) and any("never fires" in line for line in done)
+    assert any("can never hold" in line or "became `true`" in line for line in done)
+    assert any("never fires" in line for line in done)
     # a program with nothing to drop comes back unchanged
     assert simplify(sc, (planted,)) == ((planted,), [])
+
+
+def test_simplification_of_a_filter_that_always_holds_and_a_repeated_rule():
+    """The paper-budget random-cross program's last rule: its filter always holds (a distance is never below
+    -0.6), so it is `argmax(map(-1.0*d, filter(true, l)))`, the first rule again: it adds no edge and goes."""
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.synth.simplify import always_holds, simplify
+
+    planted, sc = _planted_scorer(lam=0.5)
+    rules = (planted,) + parse("argmax(map(-1.0*d, filter(theta <= 2.22 or d >= -0.6, l)))\n").rounds[0]
+    assert always_holds(rules[1].cond) and not always_holds(parse("random(filter(d >= 0.5, l))").rounds[0][0].cond)
+    before = sc.score(rules).total
+    simple, done = simplify(sc, rules)
+    assert simple == (planted,) and sc.score(simple).total == pytest.approx(before, abs=1e-9)
+    assert "became `true` (always holds)" in done[0] and "only repeats earlier rules' picks" in done[1]

@@ -42,6 +42,22 @@ def _bounds(t: Test) -> tuple[str, float, float] | None:
     return (name, t.threshold / w, math.inf) if w > 0 else (name, -math.inf, t.threshold / w)
 
 
+def always_holds(c: Cond) -> bool:
+    """True when every pair passes ``c``, whatever the data: ``true``, a bound every value of the feature meets
+    (``d >= -0.6``: a distance is never negative), or an ``or`` with such a branch."""
+    if isinstance(c, TrueCond):
+        return True
+    if isinstance(c, Or):
+        return always_holds(c.left) or always_holds(c.right)
+    if isinstance(c, And):
+        return always_holds(c.left) and always_holds(c.right)
+    b = _bounds(c) if isinstance(c, Test) else None
+    if b is None:
+        return False
+    lo0, hi0 = _range(b[0])
+    return b[1] <= lo0 and b[2] >= hi0
+
+
 def _conjuncts(c: Cond) -> list[Cond]:
     return _conjuncts(c.left) + _conjuncts(c.right) if isinstance(c, And) else [c]
 
@@ -143,9 +159,19 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
     while changed:
         changed = False
         for k, r in enumerate(rules):
+            if isinstance(r.cond, Or) and (always_holds(r.cond) or _pass_rate(scorer, r.cond) == 1.0):
+                cand = rules[:k] + (replace(r, cond=TrueCond()),) + rules[k + 1:]
+                new = scorer.score(cand).total
+                if new <= best + tol * max(1.0, abs(best)):
+                    why = "always holds" if always_holds(r.cond) else "holds for every pair of D"
+                    done.append(f"rule {k + 1}: filter `{cond_text(r.cond)}` became `true` ({why}); "
+                                f"objective {best:.4f} -> {new:.4f}")
+                    rules, best, changed = cand, new, True
+                    break
             for path, clause, op in _clauses(r.cond):
                 rate = 0.0 if never_holds(clause) else _pass_rate(scorer, clause)
-                idle = (op == "and" and rate == 1.0) or (op == "or" and rate == 0.0) or never_holds(clause)
+                idle = (op == "and" and (rate == 1.0 or always_holds(clause))) or (op == "or" and rate == 0.0) \
+                    or never_holds(clause)
                 if not idle:
                     continue
                 if op == "and" and never_holds(clause):
@@ -153,7 +179,7 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
                 cand = rules[:k] + (replace(r, cond=_drop(r.cond, path)),) + rules[k + 1:]
                 new = scorer.score(cand).total
                 if new <= best + tol * max(1.0, abs(best)):
-                    why = ("can never hold" if never_holds(clause) else
+                    why = ("can never hold" if never_holds(clause) else "always holds" if always_holds(clause) else
                            "holds for every pair of D" if rate == 1.0 else "holds for no pair of D")
                     done.append(f"rule {k + 1}: dropped `{cond_text(clause)}` from its filter ({why}); "
                                 f"objective {best:.4f} -> {new:.4f}")
@@ -161,20 +187,35 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
                     break
             if changed:
                 break
-    # rules that never fire, from the last one: dropping a rule renumbers only the rules after it
+    # rules that add no edge on D (never fire, or only repeat an earlier rule's pick), from the last one:
+    # dropping a rule renumbers only the rules after it
     for k in range(len(rules) - 1, -1, -1):
+        if len(rules) == 1:
+            break
         r = rules[k]
-        if len(rules) == 1 or not all(bool((p < 0).all()) for p in scorer.picks_of(r, k)):
+        if _edges_added(scorer, rules, k) > 0:
             continue
+        why = "never fires on D" if all(bool((p < 0).all()) for p in scorer.picks_of(r, k)) else \
+            "only repeats earlier rules' picks on D"
         cand = rules[:k] + rules[k + 1:]
         new = scorer.score(cand).total
         if new <= best + tol * max(1.0, abs(best)):
-            done.append(f"rule {k + 1}: dropped `{rule_text(r)}` (never fires on D); objective {best:.4f} -> "
-                        f"{new:.4f}")
+            done.append(f"rule {k + 1}: dropped `{rule_text(r)}` ({why}); objective {best:.4f} -> {new:.4f}")
             rules, best = cand, new
         else:
-            done.append(f"rule {k + 1}: kept `{rule_text(r)}` although it never fires on D: without it the random "
-                        f"rules after it draw other random numbers and the objective goes from {best:.4f} to "
-                        f"{new:.4f}")
+            done.append(f"rule {k + 1}: kept `{rule_text(r)}` although it {why}: "
+                        f"without it the random rules after it draw other random numbers and the objective goes "
+                        f"from {best:.4f} to {new:.4f}")
     return rules, done
+
+
+def _edges_added(scorer: CachedScorer, rules: tuple[Rule, ...], k: int) -> int:
+    """How many edges of D rule k adds that no earlier rule picked (over every bucket and random sample)."""
+    per_rule = [scorer.picks_of(r, j) for j, r in enumerate(rules[:k + 1])]
+    added = 0
+    for bi in range(len(scorer.data)):
+        for s in range(scorer.samples):
+            picks = torch.stack([p[bi][min(s, p[bi].shape[0] - 1)] for p in per_rule], -1).long()
+            added += int(dedup_valid(picks)[:, k].sum())
+    return added
 
