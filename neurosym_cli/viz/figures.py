@@ -209,7 +209,7 @@ def rule_regions(program: Program, kind: str, features: str, rec: EpisodeRecord,
     regions = rule_grid(program, round_, kind, features, rec.inputs[step, agent], rec.pos[step, agent], xs, ys)
     cols = min(len(rules), 3)
     rows = (len(rules) + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.7 * rows), dpi=110, squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 5.4 * rows), dpi=110, squeeze=False)
     others = np.arange(rec.n_agents) != agent
     for k, (rule, (keep, score)) in enumerate(zip(rules, regions)):
         ax = axes[k // cols, k % cols]
