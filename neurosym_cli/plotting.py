@@ -6,6 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
+from .viz.draw import save_figure
+
 
 def baseline_of(label: str) -> str:
     """The baseline an evaluation label belongs to (``prog-retrained-k2-lam0.5-v1`` -> ``prog-retrained``)."""
@@ -96,12 +98,7 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
         ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save_figure(fig, path)
 
 
 _PALETTE = ("#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7", "#9c755f",
@@ -163,12 +160,7 @@ def training_curves(runs: Sequence[tuple[str, str, bool, Sequence[Sequence[tuple
         ax.legend(fontsize=7, frameon=False)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save_figure(fig, path)
 
 
 def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int], ref: tuple[float, float],
@@ -210,9 +202,4 @@ def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int]
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
     ax.tick_params(labelsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, bbox_inches="tight")
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save_figure(fig, path)
