@@ -18,12 +18,9 @@ from ..episode import EpisodeRecord
 from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
-EDGE_STYLES = ("rules", "weights", "mask")
-"""how a frame draws edges: coloured by rule (programs), opacity = attention weight (soft attention), plain"""
-
-
 def edge_style(rec: EpisodeRecord, comm: str) -> str:
-    """The drawing of a provider's edges: ``comm`` is the baseline's provider kind (program, full, topk, ...)."""
+    """How a frame draws a provider's edges: "rules" (coloured by rule, programs), "weights" (opacity = attention
+    weight, soft attention) or "mask" (plain); ``comm`` is the baseline's provider kind (program, full, ...)."""
     if comm == "program" and rec.picks is not None:
         return "rules"
     return "weights" if comm == "full" else "mask"

@@ -29,14 +29,6 @@ def group_color(group: np.ndarray) -> list[str]:
     return [GROUP_COLORS[int(g) % len(GROUP_COLORS)] for g in group]
 
 
-def world_limits(*points: np.ndarray, margin: float = 0.06) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Square limits around every point given (arrays (..., 2)), with a margin, for an equal-aspect plot."""
-    xy = np.concatenate([p.reshape(-1, 2) for p in points])
-    lo, hi = xy.min(0), xy.max(0)
-    c, half = (lo + hi) / 2, (hi - lo).max() / 2 * (1 + 2 * margin) + 1e-6
-    return (c[0] - half, c[0] + half), (c[1] - half, c[1] + half)
-
-
 def frame_limits(*points: np.ndarray, margin: float = 0.06, ratio: tuple[float, float] = (0.75, 2.0)):
     """Limits around every point with a margin whose width/height stays within ``ratio`` (so a scene that is
     wide gets a wide frame, not a square one mostly empty): ((x0, x1), (y0, y1)), width / height."""
