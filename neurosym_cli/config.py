@@ -213,7 +213,10 @@ class BudgetConfig:
     batch_rollouts: int = 50
     """rollouts per optimizer step"""
     eval_seeds: int = 20
-    """evaluation seeds; every seed re-seeds everything"""
+    """evaluation (test) seeds; every seed re-seeds everything"""
+    val_seeds: int = 10
+    """validation seeds of `neurosym select`: episodes from their own stream (utils/seeding.STREAM_VAL), so no
+    validation episode is a test episode; used only to choose a configuration, never reported as a result"""
     horizon: Optional[int] = None
     """override of the task horizon (tiny budgets only); null keeps the task's"""
     retrain_rollouts: int = 1_000
@@ -231,6 +234,7 @@ class BudgetConfig:
         _check(self.train_rollouts > 0, f"budget.train_rollouts must be positive, got {self.train_rollouts}")
         _check(self.batch_rollouts > 0, f"budget.batch_rollouts must be positive, got {self.batch_rollouts}")
         _check(self.eval_seeds > 0, f"budget.eval_seeds must be positive, got {self.eval_seeds}")
+        _check(self.val_seeds > 1, f"budget.val_seeds must be at least 2 (a paired interval), got {self.val_seeds}")
         _check(self.horizon is None or self.horizon > 0, "budget.horizon must be positive or null")
         _check(self.retrain_rollouts > 0, f"budget.retrain_rollouts must be positive, got {self.retrain_rollouts}")
         _check(self.synth_rollouts > 0, f"budget.synth_rollouts must be positive, got {self.synth_rollouts}")
@@ -315,6 +319,12 @@ class SynthConfig:
     """argmax scores may read the asking agent's own state (as the reference's search): such a score ties every
     candidate, so the pick falls to agent index order; false keeps scores to features of the other agent
     (docs/fidelity.md, 'Synthesis', has the measurement)"""
+    patience: int = 0
+    """end an MCMC phase (a restart or the final chain) after this many proposals without a new best of its own
+    chain; 0 runs every phase to its length (the paper's chains). The steps it saves are not spent elsewhere"""
+    coarse: int = 1
+    """score the restart phases on every coarse-th state of D only (the same objective on a subsample); each
+    restart's best is scored on the whole of D, and the final chain always runs on the whole of D. 1 = off"""
     backend: str = "auto"
     """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
@@ -328,6 +338,33 @@ class SynthConfig:
         _check(self.random_samples > 0, "synth.random_samples must be positive")
         _check(self.max_depth in (1, 2), "synth.max_depth must be 1 or 2")
         _check(self.backend in ("auto", "numba", "torch"), "synth.backend must be auto, numba or torch")
+        _check(self.patience >= 0, f"synth.patience must be non-negative, got {self.patience}")
+        _check(self.coarse >= 1, f"synth.coarse must be at least 1, got {self.coarse}")
+
+
+@dataclass
+class SelectConfig:
+    """`neurosym select`: the paper's model selection by validation (appendix B) over a grid of configurations."""
+
+    lam: list[float] = field(default_factory=lambda: [0.3, 0.5, 0.7, 1.0])
+    """lambda-tilde values of the grid (paper appendix B)"""
+    rules: list[int] = field(default_factory=lambda: [2, 3, 4, 5])
+    """K values of the grid"""
+    features: list[str] = field(default_factory=lambda: ["v1", "v2"])
+    """feature maps of the grid"""
+    finalists: int = 3
+    """at most this many programs, the validation-best and those statistically similar to it (lowest degree
+    first), are retrained and validated again before the choice"""
+    jobs: int = 0
+    """programs searched at once, one process and one thread each; 0 = one per CPU"""
+
+    def __post_init__(self) -> None:
+        _check(bool(self.lam) and all(x >= 0 for x in self.lam), "select.lam must be a non-empty list of values >= 0")
+        _check(bool(self.rules) and all(k > 0 for k in self.rules), "select.rules must be a non-empty list of K > 0")
+        _check(bool(self.features) and all(f in ("v1", "v2") for f in self.features),
+               "select.features must be a non-empty list of v1, v2")
+        _check(self.finalists >= 1, f"select.finalists must be at least 1, got {self.finalists}")
+        _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
 
 
 def _registered_baselines() -> list[str]:
@@ -378,6 +415,10 @@ class RunConfig:
     episode: int = 0
     """render, figures: the evaluation protocol's episode (0, 1, ...: the test episodes of eval seed 0, then 1, ...)"""
     render: RenderConfig = field(default_factory=RenderConfig)
+    select: SelectConfig = field(default_factory=SelectConfig)
+    selected: bool = False
+    """take rules, lam, features and the search settings from the choice `neurosym select` recorded in
+    <exp_dir>/select/selected.json (pipeline: run the selection first when there is none)"""
 
     def __post_init__(self) -> None:
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")

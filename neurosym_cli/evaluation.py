@@ -17,7 +17,7 @@ from .envs.base import MultiAgentEnv, Rng, group_by_agents
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer
 from .rollout import METRICS, rollout
-from .utils.seeding import STREAM_EVAL, generator
+from .utils.seeding import STREAM_EVAL, STREAM_VAL, generator
 
 
 def evaluate(
@@ -27,11 +27,14 @@ def evaluate(
     seeds: Sequence[int],
     device: torch.device,
     detach_state: bool = False,
+    split: str = "test",
 ) -> list[dict[str, float]]:
-    """One row per seed: the mean over that seed's episodes of each per-episode metric (time averages)."""
+    """One row per seed: the mean over that seed's episodes of each per-episode metric (time averages).
+    ``split``: test (the reported protocol) or val (`neurosym select`'s own episodes, disjoint from the test ones)."""
+    stream = {"test": STREAM_EVAL, "val": STREAM_VAL}[split]
     states, keys = [], []
     for s in seeds:
-        eps, gens = env.test_episodes(lambda k, s=s: generator(s, STREAM_EVAL, k))
+        eps, gens = env.test_episodes(lambda k, s=s: generator(s, stream, k))
         states += eps
         keys += [(s, g) for g in gens]
     sums = {s: {m: 0.0 for m in METRICS} for s in seeds}

@@ -51,6 +51,10 @@ def _search_variants(cfg: RunConfig) -> list[tuple[str, str]]:
         out.append(("-otherscores", " synth.own_scores=false"))
     if not cfg.synth.simplify:
         out.append(("-unsimplified", " synth.simplify=false"))
+    if cfg.synth.coarse > 1:
+        out.append((f"-coarse{cfg.synth.coarse}", f" synth.coarse={cfg.synth.coarse}"))
+    if cfg.synth.patience:
+        out.append((f"-patience{cfg.synth.patience}", f" synth.patience={cfg.synth.patience}"))
     return out
 
 

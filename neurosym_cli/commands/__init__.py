@@ -8,6 +8,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "retrain": ("retrain", "fine-tune the oracle under a synthesized program or tree (paper section 3.5)"),
     "show-program": ("show_program", "print a synthesized program in the paper's notation, with its reading"),
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
+    "select": ("select", "the paper's model selection: a grid of programs, validation seeds, retrained finalists, "
+                         "one pick"),
     "report": ("report", "one table, plots, training curves and the loss-degree Pareto front over training seeds"),
     "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
     "figures": ("figures", "the paper's figures 1, 3, 4, 5 from a run directory: attention, paths, rule regions"),

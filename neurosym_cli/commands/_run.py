@@ -85,6 +85,11 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
             raise UserError(str(e).splitlines()[0]) from None
         info = RunInfo(OmegaConf.to_container(cfg, resolve=True), sweep,  # type: ignore[arg-type]
                        hc.runtime.output_dir)
+        if typed.selected and name not in ("select", "pipeline"):  # the pipeline selects first when it must
+            from ..stages.select import apply_selected
+
+            typed = apply_selected(typed)
+            info.config.update(rules=typed.rules, lam=typed.lam, features=typed.features, selected=True)
         if typed.threads:
             import torch  # only here: show-program must not pay for importing torch
 

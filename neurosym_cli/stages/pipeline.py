@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from .. import paths
-from ..baselines import get
+from ..baselines import ORACLE, get
 from ..config import RunConfig
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_json
@@ -42,6 +42,16 @@ def _trained_seconds(history: Path) -> float:
 
 def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     """Run the plan of ``cfg.baselines``; keep each stage's wall time in pipeline_timings.json; print the table."""
+    if cfg.selected:  # the paper's protocol with model selection: the pick's rules, lam, features
+        from .select import apply_selected, run_selection, selected_file
+
+        if not selected_file(cfg).exists():
+            train(*stage_config(cfg, info, Stage("train", ORACLE)))
+            run_selection(cfg, info)
+        cfg = apply_selected(cfg)
+        info = RunInfo({**info.config, "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features}, info.multirun,
+                       info.log_dir)
+        say(f"pipeline with the selected configuration: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}")
     stages = plan(cfg.baselines)
     results = {}
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took

@@ -76,6 +76,30 @@ def render(program: Program, rounds: list[dict] | None, lam: float | None, title
         console.print(Panel(t, title=name, subtitle=sub or None, expand=False))
         for line in (info or {}).get("simplified", []) if isinstance(info, dict) else []:
             console.print(f"[dim]simplified after the search:[/] {line}")
+        hall = info.get("hall_of_fame") if isinstance(info, dict) else None
+        if isinstance(hall, dict):
+            hall_of_fame(hall, lam, name)
+
+
+def hall_of_fame(hall: dict, lam: float | None, name: str) -> None:
+    """PySR-style hall of fame of one round: the best program found at each complexity and at each degree level,
+    dominated rows left out, the search's pick marked (summary.json's ``hall_of_fame``)."""
+    heads = {"complexity": ("complexity", "rules + tests; kept when its objective beats every simpler program's"),
+             "degree": ("degree ≤", "the degree term rounded up; kept when its L1 beats every lower level's")}
+    for by, (head, why) in heads.items():
+        rows = hall.get(by)
+        if not isinstance(rows, list) or not rows:
+            continue
+        t = Table(title=f"hall of fame by {by}: {name}", caption=why, header_style="bold")
+        for c in (head, "objective", "L1", "degree", "program", ""):
+            t.add_column(c, justify="left" if c in ("program", "") else "right")
+        for r in rows:
+            try:
+                t.add_row(str(r["level"]), f"{r['objective']:.4f}", f"{r['l1']:.4f}", f"{r['degree']:.3f}",
+                          str(r["program"]).strip(), "[green]◀ search's pick[/]" if r.get("chosen") else "")
+            except (KeyError, TypeError, ValueError):
+                return  # a summary of another shape: the program above stands
+        console.print(t)
 
 
 def show_program(cfg: RunConfig) -> dict:

@@ -9,10 +9,11 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
+from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
 from ..envs import make_env
-from ..synth.dataset import DataBucket, load_or_collect
+from ..synth.dataset import DataBucket, load_or_collect, subsample
 from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
 from ..synth.simplify import rule_stats, simplify
@@ -63,7 +64,8 @@ def _terms(summary: Path) -> dict:
         return {}  # a tree's summary, or one of another shape: the program itself was checked above
 
 
-def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
+def collect_dataset(cfg: RunConfig):
+    """(oracle policy, env, the dataset D, device) of ``cfg``: D is collected once per oracle and then reused."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
@@ -71,6 +73,11 @@ def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
     env = make_env(cfg.task, cfg.horizon)
     data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
                            cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
+    return policy, env, data, device
+
+
+def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
+    policy, env, data, device = collect_dataset(cfg)
     if cfg.baseline.comm == "tree":
         return fit_trees(cfg, info, policy, data, out)
     return search_program(cfg, info, policy, env, data, device, out)
@@ -79,7 +86,7 @@ def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
 def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
                    out: Path) -> dict:
     spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
-                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det, cfg.synth.own_scores)
+                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det, cfg.synth.own_scores, cfg.synth.patience)
     results, trace, rounds = [], [], []
     rich = use_rich(cfg.progress, info.multirun)
     tag = paths.program_tag(cfg)
@@ -88,6 +95,11 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         scorer = CachedScorer(policy, env, cfg.task.kind, data, r, cfg.features, cfg.lam, cfg.synth.objective,
                               cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
                               backend=cfg.synth.backend)
+        coarse = None
+        if cfg.synth.coarse > 1:  # the restarts' scorer: every coarse-th state of D, its own random numbers
+            coarse = CachedScorer(policy, env, cfg.task.kind, subsample(data, cfg.synth.coarse), r, cfg.features,
+                                  cfg.lam, cfg.synth.objective, cfg.rules, cfg.synth.random_samples,
+                                  generator(cfg.seed, STREAM_SYNTH, 300 + r), device, backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
         with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP) as disp, \
@@ -97,9 +109,9 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                 tracker.log(step, {f"search/{k}": row[k] for k in SEARCH_SCALARS})
 
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
-                               on_step)
+                               on_step, coarse)
         disp.summary(res)
-        searched = to_text(as_program([res]))
+        searched, searched_rules = to_text(as_program([res])), res.best
         dropped: list[str] = []
         if cfg.synth.simplify:
             simple, dropped = simplify(scorer, res.best)
@@ -117,7 +129,8 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                        "proposed": dict(res.proposed), "rows_recomputed": scorer.rows_recomputed,
                        "backend": "numba" if scorer.compiled else "torch",
                        "full_forward_check": None if full is None else full.total,
-                       "simplified": dropped, "searched_program": searched, "rule_stats": stats})
+                       "simplified": dropped, "searched_program": searched, "rule_stats": stats,
+                       "stopped_early": res.stopped, "hall_of_fame": hall_of_fame(res, searched_rules)})
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
@@ -137,6 +150,16 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         render(program, rounds, cfg.lam)
     return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds),
             "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
+
+
+def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
+    """summary.json's hall of fame of one round: the non-dominated best programs by complexity and by degree
+    level (``mcmc.HallOfFame.front``), the search's pick (before simplification) marked."""
+    def row(level: int, s, rules) -> dict:
+        return {"level": level, "objective": s.total, "l1": s.l1, "degree": s.degree,
+                "program": to_text(Program((rules,))), "chosen": rules == picked}
+
+    return {by: [row(*x) for x in res.hall.front(by)] for by in ("complexity", "degree")}
 
 
 def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out: Path) -> dict:

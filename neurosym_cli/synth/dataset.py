@@ -64,6 +64,11 @@ def collect(env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: 
     return [DataBucket(*(torch.cat([x[k] for x in items]) for k in range(3))) for _, items in sorted(by_n.items())]
 
 
+def subsample(buckets: list[DataBucket], every: int) -> list[DataBucket]:
+    """Every ``every``-th state of each bucket (the coarse scorer of the restarts, synth.coarse)."""
+    return [DataBucket(b.agent[::every], b.rel[::every], b.target[::every]) for b in buckets]
+
+
 FORMAT = "neurosym-dataset/1"
 
 

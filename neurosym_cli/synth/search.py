@@ -42,18 +42,21 @@ class RoundSpec:
     max_depth: int
     det: bool
     own_scores: bool = True
+    patience: int = 0
+    """proposals without a new chain best that end a phase (0: never)"""
 
 
 def search_round(scorer: CachedScorer, spec: RoundSpec, seed: str, gen: torch.Generator,
-                 on_step: Callable | None = None) -> SearchResult:
-    """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw."""
+                 on_step: Callable | None = None, coarse: CachedScorer | None = None) -> SearchResult:
+    """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw. ``coarse`` (the same objective
+    on a subsample of D) scores the restarts; the feature quantiles always come from the whole of D."""
     space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det, spec.own_scores)
     rng = random.Random(seed)
     return metropolis(
         init=lambda: random_rules(space, rng),
         propose=lambda rules: propose(rules, space, rng),
         scorer=scorer, steps=spec.steps, restarts=spec.restarts, final_fraction=spec.final_fraction,
-        temperature=spec.temperature, rng=rng, on_step=on_step,
+        temperature=spec.temperature, rng=rng, on_step=on_step, patience=spec.patience, coarse=coarse,
     )
 
 

@@ -9,6 +9,7 @@ import torch
 
 # distinct streams derived from one user seed, so e.g. evaluation episodes never reuse training draws
 STREAM_TRAIN, STREAM_EVAL, STREAM_SYNTH_DATA, STREAM_SYNTH = 1, 2, 3, 4
+STREAM_VAL = 5  # validation episodes of `neurosym select`: never a test (STREAM_EVAL) episode
 
 
 def seed_everything(seed: int) -> None:

@@ -1,0 +1,363 @@
+"""`neurosym select`: the paper's model selection by validation (appendix B) over a grid of (lam, K, features).
+
+    1. search a program for every grid point (one shared oracle dataset D; reused when it exists);
+    2. evaluate each program (prog: the oracle under it) on the validation seeds (``budget.val_seeds``, episodes
+       from their own stream, never a test episode);
+    3. finalists: the validation-best and the programs statistically similar to it (``choose``), lowest degree
+       first, at most ``select.finalists``; retrain each and evaluate it on the validation seeds again;
+    4. the choice among the retrained finalists by the same rule, written to select/selected.json;
+    5. only then the chosen program's test evaluation (prog and prog-retrained, the usual eval directories).
+
+The paper's rule: "the ones that produced the lowest cumulative reward [cost] on a validation set of rollouts;
+if the cumulative rewards are similar, we chose the ones that reduced the communication degree". Similar means
+here: the paired 95 % interval (Student t, over validation seeds) of the loss difference to the best contains 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from .. import __version__, paths
+from ..baselines import get
+from ..config import ConfigError, RunConfig, UserError
+from ..utils.console import clock, log, say
+from ..utils.io import read_json, write_csv, write_json
+from . import RunInfo
+
+# two-sided 95 % Student t quantiles by degrees of freedom (1..30); 1.96 beyond
+_T95 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
+        2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042)
+
+DEGREE = "max_degree"
+"""the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
+
+
+def t95(n: int) -> float:
+    """Two-sided 95 % Student t quantile for ``n`` paired samples (n - 1 degrees of freedom)."""
+    return _T95[n - 2] if 2 <= n <= 31 else 1.96
+
+
+def mean_ci(xs: Sequence[float]) -> tuple[float, float]:
+    """(mean, 95 % Student t half-width) of a sample."""
+    n = len(xs)
+    m = sum(xs) / n
+    if n < 2:
+        return m, math.inf
+    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1))
+    return m, t95(n) * sd / math.sqrt(n)
+
+
+def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The paper's rule on validation rows. Each row has ``name``, ``loss`` (per validation seed, the same seeds in
+    the same order for every row) and ``degree`` (its mean over those seeds).
+
+    Returns the rows annotated, ordered by (not similar, degree, loss): ``loss_mean``, ``loss_ci``, ``diff`` (mean
+    paired difference to the validation-best), ``diff_ci`` (its 95 % half-width), ``similar`` (the interval
+    contains 0: the difference is not significant) and ``picked`` (the lowest degree among the similar rows, the
+    lower mean loss on a tie)."""
+    if not rows:
+        raise ValueError("nothing to choose from")
+    seeds = {len(r["loss"]) for r in rows}
+    if len(seeds) != 1:
+        raise ValueError(f"rows are evaluated on different numbers of seeds: {sorted(seeds)}")
+    out = [dict(r) for r in rows]
+    for r in out:
+        r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
+    best = min(out, key=lambda r: r["loss_mean"])
+    for r in out:
+        d = [a - b for a, b in zip(r["loss"], best["loss"])]
+        r["diff"], r["diff_ci"] = mean_ci(d)
+        r["similar"] = r is best or r["diff"] <= r["diff_ci"]
+        r["best"] = r is best
+        r["picked"] = False
+    out.sort(key=lambda r: (not r["similar"], r["degree"], r["loss_mean"]))
+    out[0]["picked"] = True
+    return out
+
+
+# ------------------------------------------------------------------------------------------------- the grid
+def grid(cfg: RunConfig) -> list[RunConfig]:
+    """One prog config per grid point (select.lam x select.rules x select.features), in that order."""
+    out, n = [], getattr(cfg.task, "max_agents", None)
+    for k in cfg.select.rules:
+        if n is not None and k >= n:
+            raise ConfigError(f"select.rules has K={k}, but an agent of {cfg.task.name} has at most {n - 1} others")
+        for lam in cfg.select.lam:
+            for f in cfg.select.features:
+                out.append(dataclasses.replace(cfg, rules=k, lam=lam, features=f, baseline=get("prog"), cmd="synth"))
+    return out
+
+
+def point_name(cfg: RunConfig) -> str:
+    """A grid point's program tag (k5-lam0.5-v1 plus the search variant)."""
+    return paths.program_tag(cfg)
+
+
+def _val_file(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "select" / "val" / f"{paths.baseline_label(cfg)}.json"
+
+
+def validate(cfg: RunConfig) -> dict[str, Any]:
+    """Validation rows of ``cfg``'s baseline (prog or prog-retrained): per validation seed the loss and the degree.
+    Reused when the file exists for the same program text, model and seeds."""
+    import torch
+
+    from ..evaluation import evaluate
+    from ..utils.device import resolve_device
+    from ..utils.seeding import seed_everything
+    from .comm import load_baseline
+
+    program = paths.program_file(cfg).read_text()
+    model = paths.train_dir(cfg) / "model.pt"
+    stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
+             "val_seeds": cfg.budget.val_seeds}
+    out = _val_file(cfg)
+    if out.exists():
+        try:
+            old = read_json(out)
+            if {k: old.get(k) for k in stamp} == stamp:
+                return old
+        except UserError:
+            pass  # unreadable: evaluate again
+    device = resolve_device(cfg.device)
+    seed_everything(cfg.seed)
+    policy, env, comm = load_baseline(cfg, device)
+    t0 = time.perf_counter()
+    with torch.no_grad():
+        rows = evaluate(env, policy, comm, list(range(cfg.budget.val_seeds)), device, cfg.task.detach_state,
+                        split="val")
+    result = {**stamp, "label": paths.baseline_label(cfg), "seconds": time.perf_counter() - t0,
+              "loss": [r["cost"] for r in rows], "degree_per_seed": [r[DEGREE] for r in rows],
+              "max_in": sum(r["max_in"] for r in rows) / len(rows),
+              "max_out": sum(r["max_out"] for r in rows) / len(rows),
+              "degree": sum(r[DEGREE] for r in rows) / len(rows)}
+    write_json(out, result)
+    return result
+
+
+def _quiet(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
+    """A grid job's config: plain progress lines, no program tables (many run at once)."""
+    return (dataclasses.replace(cfg, progress="plain"),
+            RunInfo({**info.config, "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
+                     "cmd": cfg.cmd, "baseline": dataclasses.asdict(cfg.baseline)}, True, info.log_dir))
+
+
+def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+    """One grid point: its program (searched or reused), then its validation rows."""
+    from .synth import synthesize
+
+    cfg, info = _quiet(cfg, info)
+    terms = synthesize(cfg, info)
+    summary = read_json(paths.synth_dir(cfg) / "summary.json")
+    return {"name": point_name(cfg), "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
+            "objective": terms.get("objective"), "l1": terms.get("l1"), "degree_term": terms.get("degree"),
+            "search_seconds": sum(float(r.get("seconds", 0.0)) for r in summary.get("rounds", [])),
+            **_val_columns(validate(dataclasses.replace(cfg, cmd="eval")))}
+
+
+def retrain_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+    """One finalist: the oracle retrained under its program, then its validation rows."""
+    from .train import retrain
+
+    cfg = dataclasses.replace(cfg, baseline=get("prog-retrained"), cmd="retrain")
+    cfg, info = _quiet(cfg, info)
+    retrain(cfg, info)
+    return {"name": point_name(cfg), **_val_columns(validate(dataclasses.replace(cfg, cmd="eval")))}
+
+
+def _val_columns(v: dict[str, Any]) -> dict[str, Any]:
+    return {"loss": v["loss"], "degree": v["degree"], "max_in": v["max_in"], "max_out": v["max_out"]}
+
+
+def _worker_init(prefix_env: str) -> None:
+    import torch
+
+    torch.set_num_threads(1)  # one process per core: intra-op threads would only fight over the cores
+    os.environ["NEUROSYM_SWEPT"] = prefix_env
+
+
+def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+    """A pool worker's job: its log lines name the grid point; a UserError comes back as a value."""
+    from ..utils.console import set_job_prefix
+
+    set_job_prefix(point_name(cfg))
+    try:
+        return fn(cfg, info)
+    except UserError as e:
+        return {"name": point_name(cfg), "error": str(e)}
+    finally:
+        set_job_prefix("")
+
+
+def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what: str) -> list[dict[str, Any]]:
+    """``fn(cfg, info)`` for every config, ``jobs`` processes at once (1: in this process), in the given order."""
+    t0 = time.perf_counter()
+    results: dict[int, dict[str, Any]] = {}
+
+    def done(i: int, r: dict[str, Any]) -> None:
+        results[i] = r
+        if "error" in r:
+            raise UserError(f"{what} {r['name']}: {r['error']}")
+        log.info("%s %d/%d done: %s (%s elapsed)", what, len(results), len(cfgs), r["name"],
+                 clock(time.perf_counter() - t0))
+
+    if jobs <= 1 or len(cfgs) == 1:
+        for i, c in enumerate(cfgs):
+            done(i, _job_entry(fn, c, info))
+    else:
+        with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"), initializer=_worker_init,
+                                 initargs=("",)) as pool:
+            futures = {pool.submit(_job_entry, fn, c, info): i for i, c in enumerate(cfgs)}
+            try:
+                for f in as_completed(futures):
+                    done(futures[f], f.result())
+            except BaseException:
+                for f in futures:
+                    f.cancel()
+                raise
+    return [results[i] for i in range(len(cfgs))]
+
+
+# --------------------------------------------------------------------------------------------- the command
+def selected_file(cfg: RunConfig) -> Path:
+    return Path(cfg.exp_dir) / "select" / "selected.json"
+
+
+def select_command(cfg: RunConfig) -> str:
+    return f"neurosym select task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}"
+
+
+def apply_selected(cfg: RunConfig) -> RunConfig:
+    """``cfg`` with the recorded choice's rules, lam, features and search settings (selected=true)."""
+    path = selected_file(cfg)
+    if not path.exists():
+        raise UserError(f"selected=true, but no selection at {path}; make it with `{select_command(cfg)}`")
+    try:
+        rec = read_json(path)
+        synth = dataclasses.replace(cfg.synth, **rec["synth"])
+        return dataclasses.replace(cfg, rules=int(rec["rules"]), lam=float(rec["lam"]), features=str(rec["features"]),
+                                   synth=synth, selected=False)
+    except (KeyError, TypeError, ValueError) as e:
+        raise UserError(f"corrupt selection {path} ({e}); `{select_command(cfg)}` makes it again") from None
+
+
+def _jobs(cfg: RunConfig) -> int:
+    return cfg.select.jobs or (os.cpu_count() or 1)
+
+
+def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+    """The whole selection (module docstring); returns the choice and its test metrics."""
+    from .. import artifacts
+    from .evaluate import evaluate_baseline
+
+    artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))  # fail early
+    points = grid(cfg)
+    jobs = _jobs(cfg)
+    t0 = time.perf_counter()
+    say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
+        f"features {cfg.select.features}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
+    if any(not (paths.dataset_file(p)).exists() for p in points[:1]) and jobs > 1:
+        # collect D once here: parallel jobs would each collect it
+        from .synth import collect_dataset
+
+        collect_dataset(points[0])
+    searched = run_jobs(search_job, points, info, jobs, "program")
+    t_search = time.perf_counter() - t0
+    first = choose(searched)
+    finalists = [r for r in first if r["similar"]][:cfg.select.finalists]
+    say(f"{len([r for r in first if r['similar']])} program(s) similar to the validation-best "
+        f"{next(r['name'] for r in first if r['best'])}; retraining {len(finalists)}: "
+        + ", ".join(r["name"] for r in finalists))
+    by_name = {point_name(p): p for p in points}
+    retrained = run_jobs(retrain_job, [by_name[r["name"]] for r in finalists], info, jobs, "retrain")
+    final = choose(retrained)
+    pick = next(r for r in final if r["picked"])
+    chosen = by_name[pick["name"]]
+    record = {"command": "select", "version": __version__, "task": cfg.task.name, "seed": cfg.seed,
+              "budget": cfg.budget.name, "name": pick["name"], "rules": chosen.rules, "lam": chosen.lam,
+              "features": chosen.features,
+              "synth": {k: getattr(chosen.synth, k) for k in ("objective", "own_scores", "simplify", "coarse",
+                                                                "patience")},
+              "program": str(paths.program_file(chosen)), "val_seeds": cfg.budget.val_seeds,
+              "rule": "lowest mean validation loss; among programs whose paired 95% interval of the loss "
+                      "difference to it contains 0, the lowest max degree"}
+    write_json(selected_file(cfg), record)  # the choice is fixed before any test episode is played
+    t_select = time.perf_counter() - t0
+    test = {}
+    for b in ("prog", "prog-retrained"):
+        c = dataclasses.replace(chosen, baseline=get(b), cmd="eval")
+        test[b] = evaluate_baseline(c, RunInfo({**info.config, "cmd": "eval"}, True, info.log_dir))
+    table = _table_rows(first, final)
+    out = Path(cfg.exp_dir) / "select"
+    write_csv(out / "selection.csv", table)
+    write_json(out / "selection.json", {
+        **record, "grid": {"lam": cfg.select.lam, "rules": cfg.select.rules, "features": cfg.select.features},
+        "finalists": cfg.select.finalists, "programs": first, "retrained": final,
+        "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},
+        "seconds": {"search_and_validate": t_search, "to_choice": t_select, "total": time.perf_counter() - t0},
+        "jobs": jobs, "config": info.config})
+    print_selection(table, cfg, pick["name"], test)
+    say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
+        f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "
+        f"`neurosym pipeline task={cfg.task.name} selected=true` use it")
+    return {"selected": pick["name"], "loss": test["prog-retrained"]["cost"]["mean"],
+            "max in-deg": test["prog-retrained"]["max_in"]["mean"]}
+
+
+def _table_rows(first: list[dict], final: list[dict]) -> list[dict[str, Any]]:
+    """selection.csv: one row per configuration, validation numbers of prog and (finalists) prog-retrained."""
+    re = {r["name"]: r for r in final}
+    rows = []
+    for rank, r in enumerate(sorted(first, key=lambda r: r["loss_mean"]), start=1):
+        f = re.get(r["name"])
+        rows.append({
+            "rank": rank, "name": r["name"], "lam": r["lam"], "rules": r["rules"], "features": r["features"],
+            "objective": r["objective"], "l1": r["l1"], "degree_term": r["degree_term"],
+            "val_loss": r["loss_mean"], "val_loss_ci": r["loss_ci"], "diff_to_best": r["diff"],
+            "diff_ci": r["diff_ci"], "similar": r["similar"], "max_in": r["max_in"], "max_out": r["max_out"],
+            "max_degree": r["degree"], "search_seconds": r["search_seconds"],
+            "finalist": f is not None,
+            "retrained_val_loss": None if f is None else f["loss_mean"],
+            "retrained_val_loss_ci": None if f is None else f["loss_ci"],
+            "retrained_similar": None if f is None else f["similar"],
+            "retrained_max_degree": None if f is None else f["degree"],
+            "picked": bool(f and f["picked"])})
+    return rows
+
+
+def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -> None:
+    """The ranked table on screen (rich), the pick marked, then the pick's test numbers."""
+    from rich.table import Table
+
+    from ..utils.console import console
+
+    t = Table(title=f"selection by validation: {cfg.task.name}, {cfg.budget.val_seeds} validation seeds "
+                    f"(prog = oracle under the program; finalists retrained)", header_style="bold")
+    for c in ("#", "lam", "K", "feat", "objective", "val loss ± CI", "Δ best ± CI", "max in", "max out",
+              "max deg", "retrained val loss", "ret. deg", ""):
+        t.add_column(c, justify="left" if c in ("feat", "") else "right")
+    for r in rows:
+        ret = "-" if r["retrained_val_loss"] is None else \
+            f"{r['retrained_val_loss']:.3f} ± {r['retrained_val_loss_ci']:.3f}" + \
+            ("" if r["retrained_similar"] else " (worse)")
+        t.add_row(str(r["rank"]), f"{r['lam']:g}", str(r["rules"]), r["features"], f"{r['objective']:.3f}",
+                  f"{r['val_loss']:.3f} ± {r['val_loss_ci']:.3f}", f"{r['diff_to_best']:+.3f} ± {r['diff_ci']:.3f}"
+                  + ("" if r["similar"] else " *"), f"{r['max_in']:.2f}", f"{r['max_out']:.2f}",
+                  f"{r['max_degree']:.2f}", ret,
+                  "-" if r["retrained_max_degree"] is None else f"{r['retrained_max_degree']:.2f}",
+                  "[green]◀ picked[/]" if r["picked"] else ("finalist" if r["finalist"] else ""))
+    console.print(t)
+    console.print("* worse than the validation-best: its paired 95 % interval excludes 0. Among the finalists "
+                  "(similar to the best, lowest degree first), the pick is the lowest max degree whose retrained "
+                  "validation loss is similar to the best retrained one.")
+    pr = test["prog-retrained"]
+    console.print(f"test ({cfg.budget.eval_seeds} seeds) of {picked}: prog-retrained loss "
+                  f"{pr['cost']['mean']:.3f} ± {pr['cost']['ci95']:.3f}, max in-degree {pr['max_in']['mean']:.2f}, "
+                  f"max degree {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")
