@@ -132,8 +132,10 @@ def test_select_end_to_end_then_selected_true(tmp_path):
                                              {f["name"] for f in finalists})
     lines = (exp / "select/selection.csv").read_text().splitlines()
     assert len(lines) == 5 and "val_loss" in lines[0] and "picked" in lines[0]
-    p = run(["eval", "task=two-groups-cross", "budget=tiny", "baseline=prog-retrained", "selected=true"], tmp_path)
-    assert rec["name"] in p.stdout + p.stderr
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "baselines=[prog-retrained]", "selected=true"],
+            tmp_path)
+    assert f"rules={rec['rules']} lam={rec['lam']:g}" in p.stdout and "already trained" in p.stdout + p.stderr
+    assert f"prog-retrained-{rec['name']}" in p.stdout  # the results table names the selected program
     p = run(["show-program", "task=two-groups-cross", "budget=tiny", "selected=true"], tmp_path)
     assert "hall of fame by complexity" in p.stdout and "search's pick" in p.stdout
 
