@@ -24,7 +24,7 @@ from pathlib import Path
 
 SCHEDULES = {
     "paper": {"steps": 10_000, "patience": 0, "coarse": 1},  # the reference's chains (budget=paper, synth defaults)
-    "select": {"steps": 10_000, "patience": 1000, "coarse": 4},  # conf/select.yaml
+    "select": {"steps": 10_000, "patience": 500, "coarse": 4},  # conf/select.yaml
 }
 
 

@@ -19,6 +19,8 @@ functions below (never evaluated as code):
     {{paired V A B D}}       paired loss difference A - B over the evaluation seeds with its 95 % t half-width
     {{gap V A B}}            relative loss difference A vs B, in percent
     {{run KEY D}}            a figure of run.json (minutes)
+    {{selection T}}          `neurosym select` on task T: the ranked table, the pick, its test numbers, the
+                             paper's claims re-checked with it, the loss-degree Pareto front (select-T.json)
 
 Loss claims use paired differences over the evaluation seeds (every baseline sees the same episodes for a seed)
 with a 95 % t-interval.
@@ -117,6 +119,116 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
         fol = json.loads((logs / "followups.json").read_text())
         run["followups_min"] = max(v["seconds"] for v in fol.values()) / 60
     (RESULTS / "run.json").write_text(json.dumps(run, indent=1, sort_keys=True) + "\n")
+
+
+def collect_select(exp: Path) -> None:
+    """<exp>/select/selection.json (and the pick's test evaluations) -> docs/results/select-<task>.json."""
+    sel = json.loads((exp / "select" / "selection.json").read_text())
+    keep = ("name", "lam", "rules", "features", "objective", "l1", "degree_term", "loss", "degree", "max_in",
+            "max_out", "search_seconds")
+    out = {k: sel[k] for k in ("task", "name", "rules", "lam", "features", "synth", "val_seeds", "grid",
+                               "finalists", "seconds", "jobs", "rule")}
+    out["programs"] = [{k: r.get(k) for k in keep} for r in sel["programs"]]
+    out["retrained"] = [{k: r.get(k) for k in ("name", "loss", "degree", "max_in", "max_out")}
+                        for r in sel["retrained"]]
+    out["test"] = {}
+    for f in sorted(exp.glob(f"eval/*-{sel['name']}/metrics.json")):
+        m = json.loads(f.read_text())
+        out["test"][m["baseline"]] = {
+            "label": m["label"],
+            "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
+            "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
+    out["program"] = (exp / "synth" / sel["name"] / "program.txt").read_text().strip()
+    path = RESULTS / f"select-{sel['task']}.json"
+    path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {path}")
+
+
+def with_selected(v: dict, sel: dict) -> dict:
+    """Variant ``v`` with its prog and prog-retrained replaced by the selected program's test evaluations."""
+    out = {**v, "baselines": {**v["baselines"], **sel["test"]}, "rules": sel["rules"], "lam": sel["lam"],
+           "features": sel["features"]}
+    return out
+
+
+def selection(task: str, variants: dict[str, dict]) -> str:
+    """The select-<task>.json section: ranked table, pick, test numbers, claims with the pick, Pareto figure."""
+    from neurosym_cli.stages.select import choose
+
+    sel = json.loads((RESULTS / f"select-{task}.json").read_text())
+    v = variants[task]
+    first = choose(sel["programs"])
+    final = {r["name"]: r for r in choose(sel["retrained"])}
+    sec = sel["seconds"]
+    out = [f"Grid: lambda {sel['grid']['lam']}, K {sel['grid']['rules']}, features {sel['grid']['features']} "
+           f"({len(sel['programs'])} programs) on the oracle and dataset D of the {task} section, searched with "
+           f"`synth.coarse={sel['synth']['coarse']} synth.patience={sel['synth']['patience']}`; "
+           f"{sel['val_seeds']} validation seeds; up to {sel['finalists']} finalists retrained. "
+           f"Wall time on 2 cores ({sel['jobs']} one-thread jobs): **{sec['total'] / 60:.1f} min** in all, of which "
+           f"{sec['search_and_validate'] / 60:.1f} min searching and validating the {len(sel['programs'])} programs "
+           f"and {(sec['to_choice'] - sec['search_and_validate']) / 60:.1f} min retraining and validating the "
+           f"finalists.", "",
+           "| # | lam | K | feat | search objective | val loss (prog) | Δ to best ± 95 % | max deg | retrained val loss"
+           " | retrained max deg | |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for rank, r in enumerate(sorted(first, key=lambda r: r["loss_mean"]), start=1):
+        f = final.get(r["name"])
+        mark = "**picked**" if f and f["picked"] else ("finalist" if f else "")
+        ret = "" if f is None else f"{f['loss_mean']:.2f} ± {f['loss_ci']:.2f}" + ("" if f["similar"] else " (worse)")
+        out.append(f"| {rank} | {r['lam']:g} | {r['rules']} | {r['features']} | {r['objective']:.3f} | "
+                   f"{r['loss_mean']:.2f} ± {r['loss_ci']:.2f} | {r['diff']:+.2f} ± {r['diff_ci']:.2f}"
+                   + ("" if r["similar"] else " *") + f" | {r['degree']:.2f} | {ret} | "
+                   + ("" if f is None else f"{f['degree']:.2f}") + f" | {mark} |")
+    out += ["", "\\* worse than the validation-best: the paired 95 % interval of the difference excludes 0.", ""]
+    out += [f"The pick: **K = {sel['rules']}, lambda = {sel['lam']:g}, features {sel['features']}** "
+            f"(task default: K = {v['rules']}, lambda = {v['lam']:g}, {v['features']}):", "", "```", sel["program"],
+            "```", ""]
+    program = parse(sel["program"])
+    out += [f"- rule {k}: {describe(rule)}" for k, rule in enumerate(program.rounds[0], start=1)] + [""]
+    vs = with_selected(v, sel)
+    out += [f"Test seeds ({v['seeds']}, the same episodes as the table above), the pick against the default "
+            "configuration's programs:", "",
+            "| baseline | loss | max in-degree | max out-degree | mean degree |", "|---|---|---|---|---|"]
+    for b in ("tf-full", "hard-attn", "dist", "prog", "prog-retrained", "no-comm"):
+        if b in ("prog", "prog-retrained"):
+            out.append(f"| {b} (default {v['baselines'][b]['label'].split(b + '-')[-1]}) | {ms(v, b, 'cost')} | "
+                       f"{ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | {ms(v, b, 'mean_degree')} |")
+            out.append(f"| **{b} (selected {sel['name']})** | {ms(vs, b, 'cost')} | {ms(vs, b, 'max_in')} | "
+                       f"{ms(vs, b, 'max_out')} | {ms(vs, b, 'mean_degree')} |")
+        elif b in v["baselines"]:
+            out.append(f"| {b} | {ms(v, b, 'cost')} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
+                       f"{ms(v, b, 'mean_degree')} |")
+    out += ["", "The paper's claims with the selected program (prog, prog-retrained replaced by the pick):", ""]
+    before = {short: ok for short, _, _, ok in claims(task, v)}
+    for short, long, _, ok in claims(task, vs):
+        change = "" if before.get(short) == ok else f" (with the default configuration: {verdict(before[short])})"
+        out.append(f"- {long} -> {verdict(ok)}{change}")
+    if (DOCS / "figures" / f"{task}-pareto-selected.png").exists():
+        out += ["", f"![{task}: loss against max degree, Pareto front](figures/{task}-pareto-selected.png)"]
+    return "\n".join(out)
+
+
+def draw_pareto(task: str) -> None:
+    """docs/figures/<task>-pareto-selected.png: loss vs max degree of every baseline and the selected program."""
+    from neurosym_cli.plotting import pareto_plot
+    from neurosym_cli.utils.pareto import dominated_area, pareto_front
+
+    f = RESULTS / f"select-{task}.json"
+    if not f.exists():
+        return
+    sel = json.loads(f.read_text())
+    v = json.loads((RESULTS / f"{task}.json").read_text())
+    pts = [(v["baselines"][b]["label"], v["baselines"][b]["summary"]["max_degree"]["mean"],
+            v["baselines"][b]["summary"]["cost"]["mean"]) for b in ORDER if b in v["baselines"]]
+    pts += [(f"{b} selected {sel['name'].split('-coarse')[0]}", m["summary"]["max_degree"]["mean"],
+             m["summary"]["cost"]["mean"]) for b, m in sel["test"].items()]
+    xy = [(d, c) for _, d, c in pts]
+    front = pareto_front(xy)
+    ref = (1.05 * max(x for x, _ in xy), 1.05 * max(y for _, y in xy))
+    pareto_plot(pts, front, ref, dominated_area([xy[i] for i in front], ref),
+                f"{task} (paper budget, train seed 0): test loss against max degree (lower left is better),\n"
+                "every baseline and the program chosen by `neurosym select`",
+                DOCS / "figures" / f"{task}-pareto-selected.png")
+    print(f"drew {DOCS / 'figures' / (task + '-pareto-selected.png')}")
 
 
 # ------------------------------------------------------------------------------------------------- render
@@ -288,6 +400,7 @@ def render(template: str, variants: dict[str, dict], run: dict) -> str:
         "paired": lambda n, a, b, d: pm(paired(variants[n], a, b), int(d)),
         "gap": lambda n, a, b: f"{gap(variants[n], a, b):+.1f} %".replace("-", "−"),
         "run": lambda key, d: fmt(run[key], d),
+        "selection": lambda t: selection(t, variants),
     }
 
     def sub(m: re.Match) -> str:
@@ -308,11 +421,17 @@ def main() -> None:
     ap.add_argument("--root", default=str(ROOT / "outputs"), help="runs root of the paper protocol's artifacts")
     ap.add_argument("--check", action="store_true", help="exit 1 if docs/results.md differs from the render")
     ap.add_argument("--figures", action="store_true", help="also redraw docs/figures/<task>.png from docs/results/")
+    ap.add_argument("--collect-select", default="", metavar="EXP",
+                    help="first write docs/results/select-<task>.json from a run directory where `neurosym select` ran")
     a = ap.parse_args()
     if a.collect:
         collect(Path(a.root))
-    if a.collect or a.figures:
+    if a.collect_select:
+        collect_select(Path(a.collect_select))
+    if a.collect or a.figures or a.collect_select:
         draw_figures()
+        for task in VARIANTS:
+            draw_pareto(task)
     text = render(TEMPLATE.read_text(), *load())
     target = DOCS / "results.md"
     if a.check:

@@ -22,6 +22,8 @@ EXAMPLES = """examples:
   neurosym synth task=random-grid rules=2 lam=0.5 features=v1
   neurosym synth -m rules=2,3,4,5 lam=0.3,0.5,0.7,1.0 hydra/launcher=joblib
   neurosym show-program task=random-grid rules=2
+  neurosym select task=random-grid budget=paper      # the paper's grid, chosen by validation (appendix B)
+  neurosym pipeline task=random-grid selected=true   # every baseline with the selected K, lambda, features
   neurosym eval task=random-grid baseline=prog rules=2
   neurosym retrain task=random-grid rules=2 lam=0.5
   neurosym eval task=random-grid baseline=prog-retrained rules=2

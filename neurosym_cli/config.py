@@ -63,6 +63,10 @@ class TaskConfig:
     """episodes per evaluation seed when the task has no fixed test settings"""
     test_settings: list[str] = field(default_factory=list)
     """fixed evaluation settings (one episode each per seed); empty = eval_episodes random episodes"""
+    link_failure: float = 0.0
+    """probability that a directed link fails, independently at every step and round, for every baseline in
+    training and evaluation: a selected message is lost (policy/comm.LinkFailure; docs/fidelity.md, 'Link
+    failure'). Above 0 the run directory is <task>-fail<p> (paper appendix E: random-grid-noisy, 0.5)"""
 
     def __post_init__(self) -> None:
         _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
@@ -70,6 +74,7 @@ class TaskConfig:
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
         _check(self.noise_std >= 0.0, "task.noise_std must be non-negative")
         _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
+        _check(0.0 <= self.link_failure < 1.0, f"task.link_failure must lie in [0, 1), got {self.link_failure}")
 
 
 @dataclass
@@ -367,6 +372,27 @@ class SelectConfig:
         _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
 
 
+@dataclass
+class StressConfig:
+    """`neurosym stress`: trained baselines evaluated zero-shot at other team sizes and under link failure."""
+
+    baselines: list[str] = field(default_factory=lambda: ["tf-full", "hard-attn", "dist", "prog", "prog-retrained",
+                                                          "no-comm"])
+    """the baselines to stress (those not trained in the run directory are skipped, by name)"""
+    agents: list[int] = field(default_factory=lambda: [5, 10, 20, 40])
+    """agents per group (random-cross: 4 groups, so up to 160 agents), at no link failure"""
+    failure: list[float] = field(default_factory=lambda: [0.0, 0.1, 0.3, 0.5])
+    """link failure rates, at the task's own team size"""
+    seeds: int = 5
+    """test seeds per condition (the same seeds and episodes for every baseline)"""
+
+    def __post_init__(self) -> None:
+        _check(all(n > 1 for n in self.agents), "stress.agents must be team sizes of at least 2 per group")
+        _check(all(0.0 <= f < 1.0 for f in self.failure), "stress.failure must hold rates in [0, 1)")
+        _check(self.seeds > 0, f"stress.seeds must be positive, got {self.seeds}")
+        _check(bool(self.agents or self.failure), "stress.agents and stress.failure are both empty")
+
+
 def _registered_baselines() -> list[str]:
     from .baselines import BASELINES  # the registry builds on this module's schemas
 
@@ -416,6 +442,7 @@ class RunConfig:
     """render, figures: the evaluation protocol's episode (0, 1, ...: the test episodes of eval seed 0, then 1, ...)"""
     render: RenderConfig = field(default_factory=RenderConfig)
     select: SelectConfig = field(default_factory=SelectConfig)
+    stress: StressConfig = field(default_factory=StressConfig)
     selected: bool = False
     """take rules, lam, features and the search settings from the choice `neurosym select` recorded in
     <exp_dir>/select/selected.json (pipeline: run the selection first when there is none)"""

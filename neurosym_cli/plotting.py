@@ -203,3 +203,56 @@ def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int]
     ax.tick_params(labelsize=7)
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def stress_plot(results: Sequence[Mapping], cfg, path: Path) -> Path:
+    """`neurosym stress`: loss, max in-degree and max out-degree (mean ± 95 % interval over the test seeds) of every
+    baseline against the team size (top row, no link failure) and against the link failure rate (bottom row, the
+    task's team size); the trained team size is marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .viz.draw import save_figure
+
+    axes_of = [("agents", "max_agents", "agents in the largest episode, N (log scale)"),
+               ("failure", "link_failure", "link failure rate (each directed link, every step)")]
+    rows = [a for a in axes_of if any(r["axis"] == a[0] for r in results)]
+    metrics = [("cost", "loss (summed over agents; lower is better)"), ("max_in", "max in-degree"),
+               ("max_out", "max out-degree")]
+    fig, axes = plt.subplots(len(rows), 3, figsize=(14, 3.9 * len(rows)), dpi=110, squeeze=False)
+    trained_n = [r["max_agents"] for r in results if r["axis"] == "failure"]
+    for row, (axis, key, xlabel) in zip(axes, rows):
+        pts = [r for r in results if r["axis"] == axis]
+        for ax, (m, ylabel) in zip(row, metrics):
+            for label in dict.fromkeys(r["label"] for r in pts):
+                mine = sorted((r for r in pts if r["label"] == label), key=lambda r: r[key])
+                x = [r[key] for r in mine]
+                y = [r[m]["mean"] for r in mine]
+                e = [r[m]["ci95"] for r in mine]
+                ax.errorbar(x, y, yerr=e, marker="o", ms=4, capsize=2, label=label, color=color(baseline_of(label)))
+            if axis == "agents":
+                ax.set_xscale("log")
+                xs = sorted({r[key] for r in pts} | set(trained_n[:1]))
+                ax.set_xticks(xs, [str(v) for v in xs])
+                ax.minorticks_off()
+                if trained_n:
+                    ax.axvline(trained_n[0], color="0.6", ls=":", lw=1)
+                    ax.annotate(" trained here", (trained_n[0], 1), xycoords=("data", "axes fraction"),
+                                va="top", fontsize=7, color="0.4")
+            if m == "max_in" and cfg.rules:
+                ax.axhline(cfg.rules, color="0.6", ls="--", lw=1)
+                ax.annotate(f" K = {cfg.rules}: a program's in-degree bound", (0, cfg.rules),
+                            xycoords=("axes fraction", "data"), va="bottom", fontsize=7, color="0.4")
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_ylabel(ylabel, fontsize=8)
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=7)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(6, len(labels)), fontsize=8, frameon=False)
+    fig.suptitle(f"zero-shot stress on {cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}; trained at "
+                 f"{cfg.task.agents_per_group} per group with no link failure), mean ± 95 % interval over "
+                 f"{cfg.stress.seeds} test seeds", fontsize=9)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
+    return save_figure(fig, path)

@@ -10,6 +10,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
     "select": ("select", "the paper's model selection: a grid of programs, validation seeds, retrained finalists, "
                          "one pick"),
+    "stress": ("stress", "trained baselines zero-shot at other team sizes (up to 160 agents) and under link failure"),
     "report": ("report", "one table, plots, training curves and the loss-degree Pareto front over training seeds"),
     "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
     "figures": ("figures", "the paper's figures 1, 3, 4, 5 from a run directory: attention, paths, rule regions"),

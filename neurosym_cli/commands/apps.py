@@ -10,11 +10,19 @@ import importlib
 
 import hydra
 from hydra.core.config_store import ConfigStore
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from ..baselines import BASELINES
 from ..config import TASK_SCHEMAS, RunConfig
 from . import COMMANDS
+
+def fail_suffix(p: float) -> str:
+    """Run directories of link-failure runs are apart from the task's own: <task>-fail<p> (nothing at 0)."""
+    return f"-fail{float(p):g}" if float(p) > 0 else ""
+
+
+if not OmegaConf.has_resolver("fail_suffix"):
+    OmegaConf.register_new_resolver("fail_suffix", fail_suffix)
 
 _store = ConfigStore.instance()
 _store.store(name="run_schema", node=RunConfig)

@@ -146,6 +146,40 @@ class TreeComm(_Dense):
         return self.trees[min(round, len(self.trees) - 1)].predict(feats) & _others(logits)
 
 
+class LinkFailure:
+    """Any provider with unreliable links: each directed link fails independently with probability ``p`` at every
+    step and round, and a selected message over a failed link is lost. The inner provider chooses without
+    knowing which links failed (a program's rule does not pick again), so the masks, and the degrees counted
+    from them, hold only the messages actually delivered (docs/fidelity.md, 'Link failure')."""
+
+    def __init__(self, inner: CommProvider, p: float):
+        self.inner, self.p = inner, p
+        self.name = inner.name
+
+    def _alive(self, ctx: CommContext, shape: torch.Size) -> Tensor:
+        """(B, N, N) bool: link j -> i delivers this round (drawn from the bucket's random source)."""
+        b, n = shape[0], shape[1]
+        return ctx.rng.rand(b, n, n) >= self.p
+
+    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
+        return self.inner.select(ctx, logits, round) & self._alive(ctx, logits.shape)
+
+    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        pk = self.inner.picks(ctx, round)
+        if pk is None or pk.shape[-1] == 0:
+            return pk
+        alive = self._alive(ctx, ctx.obs.agent.shape).gather(-1, pk.clamp(min=0))  # (B, N, K)
+        return pk.masked_fill(~alive, -1)
+
+    def __getattr__(self, name: str):  # the inner provider's program, trees, k, ...
+        return getattr(self.inner, name)
+
+
+def with_link_failure(comm: CommProvider, p: float) -> CommProvider:
+    """``comm`` unchanged at p = 0 (no extra random draws: results stay bit-identical), else wrapped."""
+    return LinkFailure(comm, p) if p > 0 else comm
+
+
 def make_comm(kind: str, k: int) -> CommProvider:
     """Provider by name (``baseline.comm``); k = rules for the degree-limited ones."""
     if kind == "full":

@@ -7,7 +7,7 @@ from .. import artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
 from ..envs.features import feature_names
-from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm
+from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm, with_link_failure
 from ..dsl.files import load_program
 from ..utils.io import ArtifactError, read_json
 
@@ -25,7 +25,12 @@ def check_program(program: Program, cfg: RunConfig, source: str) -> None:
 
 
 def baseline_comm(cfg: RunConfig) -> CommProvider:
-    """The provider of ``cfg.baseline``: a program or tree from the run directory (or ``program=``), or a rule."""
+    """The provider of ``cfg.baseline`` (a program or tree from the run directory or ``program=``, or a rule), with
+    the task's link failure."""
+    return with_link_failure(_provider(cfg), cfg.task.link_failure)
+
+
+def _provider(cfg: RunConfig) -> CommProvider:
     if cfg.baseline.comm == "program":
         path = paths.program_file(cfg)
         program = load_program(path, None if cfg.program else paths.synth_command(cfg))

@@ -151,7 +151,7 @@ def print_table(cfg: RunConfig) -> None:
 def report(cfg: RunConfig) -> dict:
     """`neurosym report`: the evaluations of every training seed of a (task, budget), or of ``report_dir``, as one
     table; writes report.json, report.csv and report.png beside the seed directories."""
-    root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.runs_root) / cfg.task.name / cfg.budget.name
+    root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.exp_dir).parent  # <runs_root>/<task>/<budget>
     rows, seeds = aggregate(root)
     if not rows:
         raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "

@@ -176,11 +176,20 @@ def _val_columns(v: dict[str, Any]) -> dict[str, Any]:
     return {"loss": v["loss"], "degree": v["degree"], "max_in": v["max_in"], "max_out": v["max_out"]}
 
 
-def _worker_init(prefix_env: str) -> None:
+def _worker_init() -> None:
+    """A pool worker: one thread, and plain log lines on stdout (a spawned process has no logging set up, so its
+    progress lines would be lost)."""
+    import logging
+    import sys
+
     import torch
 
     torch.set_num_threads(1)  # one process per core: intra-op threads would only fight over the cores
-    os.environ["NEUROSYM_SWEPT"] = prefix_env
+    handler = logging.StreamHandler(sys.stdout)
+    handler.setFormatter(logging.Formatter("[%(asctime)s] %(levelname)s %(message)s", "%H:%M:%S"))
+    root = logging.getLogger()
+    root.handlers[:] = [handler]
+    root.setLevel(logging.INFO)
 
 
 def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
@@ -212,8 +221,8 @@ def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what
         for i, c in enumerate(cfgs):
             done(i, _job_entry(fn, c, info))
     else:
-        with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"), initializer=_worker_init,
-                                 initargs=("",)) as pool:
+        with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"),
+                                 initializer=_worker_init) as pool:
             futures = {pool.submit(_job_entry, fn, c, info): i for i, c in enumerate(cfgs)}
             try:
                 for f in as_completed(futures):

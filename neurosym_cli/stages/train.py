@@ -15,7 +15,7 @@ from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
-from ..policy.comm import CommProvider
+from ..policy.comm import CommProvider, with_link_failure
 from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.device import resolve_device
@@ -57,7 +57,8 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_env(cfg.task, cfg.horizon)
-    comm = make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules)
+    comm = with_link_failure(make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules),
+                             cfg.task.link_failure)
     return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
                      lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
 

@@ -1,0 +1,120 @@
+"""`neurosym stress`: trained baselines evaluated zero-shot, without retraining, at other team sizes and under link
+failure (the questions users ask beyond the paper: does a policy trained at one N hold at another, and what
+happens when links fail?). Writes <exp_dir>/stress/stress.json, stress.csv and stress.png."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+from .. import paths
+from ..baselines import get
+from ..config import ConfigError, RunConfig, UserError
+from ..utils.console import clock, log, say
+from ..utils.io import write_csv, write_json
+from . import RunInfo
+
+METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
+
+
+def conditions(cfg: RunConfig) -> list[tuple[str, int, float]]:
+    """(axis, agents per group, link failure): every team size at no failure, then every failure rate at the
+    task's own team size."""
+    n0 = cfg.task.agents_per_group
+    out = [("agents", n, 0.0) for n in cfg.stress.agents]
+    out += [("failure", n0, f) for f in cfg.stress.failure]
+    return out
+
+
+def stress_point(cfg: RunConfig, agents: int, failure: float) -> dict[str, Any]:
+    """The baseline of ``cfg`` (its trained weights, its program) on the test seeds with ``agents`` per group and
+    link failure ``failure``: mean, std and 95 % half-width of each metric."""
+    from ..evaluation import evaluate, summarize
+    from ..utils.device import resolve_device
+    from ..utils.seeding import seed_everything
+    from .comm import load_baseline
+
+    task = dataclasses.replace(cfg.task, agents_per_group=agents, link_failure=failure)
+    c = dataclasses.replace(cfg, task=task)  # exp_dir is unchanged: the weights and programs trained at the task's N
+    device = resolve_device(c.device)
+    seed_everything(c.seed)
+    policy, env, comm = load_baseline(c, device)
+    rows = evaluate(env, policy, comm, list(range(cfg.stress.seeds)), device, c.task.detach_state)
+    s = summarize(rows)
+    return {m: {k: s[m][k] for k in ("mean", "std", "ci95")} for m in METRICS}
+
+
+def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+    """Every (baseline, condition) of ``conditions``; baselines without trained weights are skipped by name."""
+    if cfg.task.kind != "formation":
+        raise ConfigError(f"stress varies the team size of the formation tasks (random-cross, two-groups-cross, "
+                          f"random-grid); {cfg.task.name}'s programs read per-goal features fixed by its N")
+    if cfg.task.link_failure > 0:
+        raise ConfigError("stress sets the link failure itself (stress.failure); run it on the failure-free task")
+    conds = conditions(cfg)
+    t0 = time.perf_counter()
+    results: list[dict[str, Any]] = []
+    skipped: dict[str, str] = {}
+    for name in cfg.stress.baselines:
+        b = dataclasses.replace(cfg, baseline=get(name), cmd="eval")
+        label = paths.baseline_label(b)
+        for axis, n, f in conds:
+            try:
+                r = stress_point(b, n, f)
+            except UserError as e:  # not trained here (or no program): say so and go on with the others
+                skipped[label] = str(e)
+                log.warning("stress: skipped %s: %s", label, e)
+                break
+            n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents  # type: ignore[attr-defined]
+            results.append({"baseline": name, "label": label, "axis": axis, "agents_per_group": n,
+                            "max_agents": n_total, "link_failure": f, **r})
+            log.info("stress %s: %d per group, link failure %g: loss %.3f, max in-degree %.2f (%s elapsed)", label,
+                     n, f, r["cost"]["mean"], r["max_in"]["mean"], clock(time.perf_counter() - t0))
+    if not results:
+        raise UserError("stress: no baseline of stress.baselines is trained here; "
+                        f"`neurosym pipeline task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` makes them")
+    out = Path(cfg.exp_dir) / "stress"
+    write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
+                                     "seeds": cfg.stress.seeds, "results": results, "skipped": skipped,
+                                     "seconds": time.perf_counter() - t0, "config": info.config})
+    write_csv(out / "stress.csv", [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
+                                   for r in results])
+    from ..plotting import stress_plot
+
+    png = stress_plot(results, cfg, out / "stress.png")
+    print_stress(results, cfg)
+    say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out / 'stress.csv'}, {png}")
+    return {"points": len(results)}
+
+
+def print_stress(results: list[dict], cfg: RunConfig) -> None:
+    from rich.table import Table
+
+    from ..utils.console import console
+
+    for axis, head in (("agents", "agents per group"), ("failure", "link failure")):
+        rows = [r for r in results if r["axis"] == axis]
+        if not rows:
+            continue
+        keys = sorted({r["agents_per_group"] if axis == "agents" else r["link_failure"] for r in rows})
+        t = Table(title=f"zero-shot {head} ({cfg.task.name}, trained at {cfg.task.agents_per_group} per group, "
+                        f"{cfg.stress.seeds} test seeds): loss / max in-degree / max out-degree",
+                  header_style="bold")
+        t.add_column("baseline")
+        for k in keys:
+            if axis == "failure":
+                t.add_column(f"{k:g}", justify="right")
+                continue
+            n_max = dataclasses.replace(cfg.task, agents_per_group=k).max_agents  # type: ignore[attr-defined]
+            t.add_column(f"{k} (N ≤ {n_max})", justify="right")
+        for label in dict.fromkeys(r["label"] for r in rows):
+            cells = []
+            for k in keys:
+                r = next((r for r in rows if r["label"] == label and
+                          (r["agents_per_group"] if axis == "agents" else r["link_failure"]) == k), None)
+                cells.append("-" if r is None else f"{r['cost']['mean']:.2f} / {r['max_in']['mean']:.2f} / "
+                                                   f"{r['max_out']['mean']:.2f}")
+            t.add_row(label, *cells)
+        console.print(t)
