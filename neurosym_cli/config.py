@@ -427,6 +427,9 @@ class RunConfig:
     """start over instead of resuming from an existing checkpoint"""
     progress: str = "auto"
     """auto (rich bar on a terminal, log lines otherwise), rich, plain"""
+    plots: bool = True
+    """eval, pipeline, report, stress: draw their PNG figures (false: tables, CSV and JSON only; quicker sweeps).
+    `neurosym render` and `neurosym figures` always draw"""
     logger: str = "csv"
     """run tracking: csv (history.csv, trace.csv: always written) or tensorboard (also event files under
     <exp_dir>/tensorboard; the tensorboard extra)"""

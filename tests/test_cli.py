@@ -12,8 +12,12 @@ import pytest
 from conftest import ROOT, neurosym_cmd
 
 
-def run(args, tmp_path, check=True, timeout=300):
+def run(args, tmp_path, check=True, timeout=300, plots=False):
+    """The console script in a subprocess; the PNGs of eval, pipeline and report are off (plots=false) unless a
+    test checks them: matplotlib was a third of a tiny eval's time."""
     env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path)}
+    if args and not args[0].startswith("-") and not any(a.startswith("plots=") for a in args):
+        args = [*args, f"plots={str(plots).lower()}"]
     p = subprocess.run([*neurosym_cmd(), *args], cwd=tmp_path, env=env, capture_output=True, text=True,
                        timeout=timeout)
     if check and p.returncode != 0:
@@ -236,7 +240,7 @@ def test_retrain_smoke(tmp_path):
 
 def test_pipeline_tiny_reuses_artifacts(tmp_path):
     base = "baselines=[tf-full,dist,prog,prog-retrained,dt,dt-retrained]"
-    p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path)
+    p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path, plots=True)
     assert "pipeline done" in p.stdout
     exp = tmp_path / "random-grid/tiny/seed0"
     for label in ("tf-full", "dist-k2", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1", "dt-k2-v1",
@@ -260,9 +264,10 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
 
 def test_per_seed_pipelines_and_report(tmp_path):
     run(["pipeline", "-m", "seed=0,1", "task=random-grid", "budget=tiny", "baselines=[tf-full,prog]"], tmp_path)
-    p = run(["report", "task=random-grid", "budget=tiny"], tmp_path)
+    assert not list(tmp_path.glob("random-grid/tiny/seed*/eval/*.png"))  # plots=false: tables and files only
+    p = run(["report", "task=random-grid", "budget=tiny"], tmp_path, plots=True)
     assert "2 training seeds" in p.stdout
-    p = run(["report", f"report_dir={tmp_path / 'random-grid/tiny/seed1'}"], tmp_path)
+    p = run(["report", f"report_dir={tmp_path / 'random-grid/tiny/seed1'}"], tmp_path, plots=True)
     assert "1 training seed:" in p.stdout and (tmp_path / "random-grid/tiny/seed1/report.png").exists()
     rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
     assert set(rep["baselines"]) == {"tf-full", "prog-k2-lam0.5-v1"}

@@ -83,7 +83,8 @@ def test_stress_command_on_a_tiny_run(tmp_path):
     run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "rules=1",
          "baselines=[tf-full,prog,prog-retrained]"], tmp_path)
     p = run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "rules=1", "stress.agents=[3,20]",
-             "stress.failure=[0,0.5]", "stress.seeds=2", "stress.baselines=[tf-full,prog-retrained,dist]"], tmp_path)
+             "stress.failure=[0,0.5]", "stress.seeds=2", "stress.baselines=[tf-full,prog-retrained,dist]"], tmp_path,
+            plots=True)
     out = tmp_path / "two-groups-cross/tiny/seed0/stress"
     res = json.loads((out / "stress.json").read_text())
     assert (out / "stress.png").exists() and (out / "stress.csv").exists()

@@ -12,7 +12,8 @@ from ..stages.results import print_table, write_figure
 def run(cfg: RunConfig, info: RunInfo) -> dict:
     summary = evaluate_baseline(cfg, info)
     if info.multirun:
-        write_figure(cfg)
+        if cfg.plots:
+            write_figure(cfg)
     else:
         print_table(cfg)
     return summary

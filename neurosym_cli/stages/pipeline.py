@@ -77,7 +77,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     from .render import make_figures
 
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
-        make_figures(cfg, info)
+        if cfg.plots:
+            make_figures(cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "

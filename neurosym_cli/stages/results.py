@@ -106,7 +106,7 @@ def write_curves(root: Path, head: str, path: Path) -> Path | None:
     return training_curves(runs, head, path) if runs else None
 
 
-def write_pareto(rows: Rows, root: Path, head: str) -> tuple[Path, Path]:
+def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[Path, Path | None]:
     """pareto.csv and pareto.png: loss against max degree of every row, the non-dominated set, and the area it
     dominates up to the reference point (1.05 x the largest degree and the largest loss found here)."""
     from ..utils.pareto import dominated_area, pareto_front
@@ -121,7 +121,7 @@ def write_pareto(rows: Rows, root: Path, head: str) -> tuple[Path, Path]:
                           "ref_max_degree": ref[0], "ref_loss": ref[1], "dominated_area": area}
                          for k, (label, x, y) in enumerate(pts)])
     png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + "\nloss against degree: the lower "
-                      "left is better", root / "pareto.png")
+                      "left is better", root / "pareto.png") if plot else None
     log.info("non-dominated (loss, max degree): %s; dominated area %.4g up to %s",
              ", ".join(pts[i][0] for i in front), area, tuple(round(v, 4) for v in ref))
     return csv_path, png
@@ -143,9 +143,10 @@ def write_figure(cfg: RunConfig) -> Path:
 
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
-    png = write_figure(cfg)
     console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS))
-    console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
+    if cfg.plots:
+        png = write_figure(cfg)
+        console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
 
 
 def report(cfg: RunConfig) -> dict:
@@ -166,16 +167,16 @@ def report(cfg: RunConfig) -> dict:
                                           "baselines": {label: s for label, s in rows}})
         write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
                                                                for x in ("mean", "std")}} for label, s in rows])
-        png = figure2(rows, head.replace(": ", ":\n"), root / "report.png")
-        pareto_csv, pareto_png = write_pareto(rows, root, head)
+        pareto_csv, pareto_png = write_pareto(rows, root, head, cfg.plots)
+        png = figure2(rows, head.replace(": ", ":\n"), root / "report.png") if cfg.plots else None
         plural = "s" if len(seeds) > 1 else ""
         curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed{plural}",
-                              root / "report_curves.png")
+                              root / "report_curves.png") if cfg.plots else None
     except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
         log.warning("report files not written (%s); the table above is the report", e)
         return {"report": None}
-    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {png}, {pareto_csv}, {pareto_png}"
-                  + (f", {curves}" if curves else ""))
+    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {pareto_csv}"
+                  + "".join(f", {f}" for f in (png, pareto_png, curves) if f))
     figures = sorted(root.glob("seed*/figures/*.png")) or sorted(root.glob("figures/*.png"))
     if figures:  # drawn per training seed by the pipeline or `neurosym figures`
         console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))

@@ -83,9 +83,9 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
                                    for r in results])
     from ..plotting import stress_plot
 
-    png = stress_plot(results, cfg, out / "stress.png")
+    png = stress_plot(results, cfg, out / "stress.png") if cfg.plots else None
     print_stress(results, cfg)
-    say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out / 'stress.csv'}, {png}")
+    say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out / 'stress.csv'}" + (f", {png}" if png else ""))
     return {"points": len(results)}
 
 
