@@ -20,6 +20,7 @@ import math
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -227,6 +228,9 @@ def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what
             try:
                 for f in as_completed(futures):
                     done(futures[f], f.result())
+            except BrokenProcessPool as e:  # a worker was killed (out of memory, a signal): finished jobs are kept
+                raise UserError(f"a {what} process died ({e}); what finished is on disk, rerun the same command "
+                                "to resume") from None
             except BaseException:
                 for f in futures:
                     f.cancel()
