@@ -100,11 +100,14 @@ def plot(runs: list[dict], path: Path, title: str) -> None:
                           + (f", coarse {SCHEDULES[r['schedule']]['coarse']}, patience "
                              f"{SCHEDULES[r['schedule']]['patience']}" if r["schedule"] != "paper" else "") + ")")
         finals = [r["best"] for r in runs if r["rules"] == k]
+        target = statistics.median(r["best"] for r in runs if r["rules"] == k and r["schedule"] == "paper")
+        ax.axhline(target, color="0.3", ls=":", lw=1, label=f"the paper chains' median final ({target:.3f})")
         lo, hi = min(finals), max(finals)
         ax.set_ylim(lo - 0.1 * (hi - lo + 0.1), lo + 3 * (hi - lo + 0.1))
         ax.set_xlabel("wall time (s, one core)")
         ax.set_ylabel("best objective on the whole of D (lower is better)")
-        ax.set_title(f"K = {k}, lam = {runs[0]['lam']:g}")
+        seeds = len({r["seed"] for r in runs if r["rules"] == k})
+        ax.set_title(f"K = {k}, lam = {runs[0]['lam']:g}, {seeds} search seeds per schedule", fontsize=10)
         handles, labels = ax.get_legend_handles_labels()
         keep = dict(zip(labels, handles))
         ax.legend(keep.values(), keep.keys(), fontsize=8)
@@ -124,7 +127,14 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", default="")
     ap.add_argument("--plot", default="")
+    ap.add_argument("--replot", default="", metavar="JSON", help="only redraw --plot from a saved --json file")
     a = ap.parse_args()
+    if a.replot:
+        saved = json.loads(Path(a.replot).read_text())
+        runs = saved["runs"]
+        plot(runs, Path(a.plot), f"time to quality on {Path(saved['exp']).parts[-3]} ({runs[0]['states']} states in "
+                                 "D): the paper's chains vs the selection's schedule")
+        return
     jobs = [(a.exp, s, k, a.lam, a.features, seed) for k in a.rules for seed in range(a.seeds) for s in SCHEDULES]
     with ProcessPoolExecutor(a.workers, mp_context=get_context("spawn")) as pool:
         runs = list(pool.map(one, *zip(*jobs)))

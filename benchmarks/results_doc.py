@@ -19,6 +19,7 @@ functions below (never evaluated as code):
     {{paired V A B D}}       paired loss difference A - B over the evaluation seeds with its 95 % t half-width
     {{gap V A B}}            relative loss difference A vs B, in percent
     {{run KEY D}}            a figure of run.json (minutes)
+    {{stress T}}             `neurosym stress` on task T: loss and degrees at other team sizes and under link failure
     {{selection T}}          `neurosym select` on task T: the ranked table, the pick, its test numbers, the
                              paper's claims re-checked with it, the loss-degree Pareto front (select-T.json)
 
@@ -142,6 +143,65 @@ def collect_select(exp: Path) -> None:
     path = RESULTS / f"select-{sel['task']}.json"
     path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
     print(f"wrote {path}")
+
+
+def collect_stress(exp: Path) -> None:
+    """<exp>/stress/stress.json -> docs/results/stress-<task>.json (without the config)."""
+    st = json.loads((exp / "stress" / "stress.json").read_text())
+    st.pop("config", None)
+    cfg = json.loads((exp / "stress" / "stress.json").read_text())["config"]
+    st.update(budget=cfg["budget"]["name"], seed=cfg["seed"], rules=cfg["rules"], lam=cfg["lam"],
+              features=cfg["features"])
+    path = RESULTS / f"stress-{st['task']}.json"
+    path.write_text(json.dumps(st, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {path}")
+
+
+def _stress_cfg(st: dict):
+    """What plotting.stress_plot reads of a config, from a stress result file."""
+    from types import SimpleNamespace as NS
+
+    return NS(rules=st["rules"], seed=st["seed"], task=NS(name=st["task"], agents_per_group=st["trained_agents_per_group"]),
+              budget=NS(name=st["budget"]), stress=NS(seeds=st["seeds"]))
+
+
+def draw_stress(task: str) -> None:
+    from neurosym_cli.plotting import stress_plot
+
+    f = RESULTS / f"stress-{task}.json"
+    if f.exists():
+        st = json.loads(f.read_text())
+        stress_plot(st["results"], _stress_cfg(st), DOCS / "figures" / f"{task}-stress.png")
+        print(f"drew {DOCS / 'figures' / (task + '-stress.png')}")
+
+
+def stress(task: str) -> str:
+    """The stress-<task>.json section: one table per axis (loss / max in / max out per baseline), the figure."""
+    st = json.loads((RESULTS / f"stress-{task}.json").read_text())
+    out = []
+    for axis, head in (("agents", "agents per group (no link failure)"),
+                       ("failure", f"link failure rate ({st['trained_agents_per_group']} agents per group)")):
+        rows = [r for r in st["results"] if r["axis"] == axis]
+        if not rows:
+            continue
+        key = "agents_per_group" if axis == "agents" else "link_failure"
+        levels = sorted({r[key] for r in rows})
+        names = {r[key]: (f"{r[key]} (N ≤ {r['max_agents']})" if axis == "agents" else f"{r[key]:g}") for r in rows}
+        out += [f"Loss / max in-degree / max out-degree by {head}, mean over {st['seeds']} test seeds:", "",
+                "| baseline | " + " | ".join(names[k] for k in levels) + " |", "|---" * (len(levels) + 1) + "|"]
+        for label in dict.fromkeys(r["label"] for r in rows):
+            cells = []
+            for k in levels:
+                r = next((r for r in rows if r["label"] == label and r[key] == k), None)
+                cells.append("-" if r is None else f"{r['cost']['mean']:.1f} / {r['max_in']['mean']:.2f} / "
+                                                   f"{r['max_out']['mean']:.2f}")
+            out.append(f"| {label} | " + " | ".join(cells) + " |")
+        out.append("")
+    if st.get("skipped"):
+        out += ["Not stressed (not trained in that run directory): " + ", ".join(sorted(st["skipped"])) + ".", ""]
+    if (DOCS / "figures" / f"{task}-stress.png").exists():
+        out.append(f"![{task}: zero-shot stress](figures/{task}-stress.png)")
+    return "\n".join(out).rstrip("\n")
 
 
 def with_selected(v: dict, sel: dict) -> dict:
@@ -410,6 +470,7 @@ def render(template: str, variants: dict[str, dict], run: dict) -> str:
         "gap": lambda n, a, b: f"{gap(variants[n], a, b):+.1f} %".replace("-", "−"),
         "run": lambda key, d: fmt(run[key], d),
         "selection": lambda t: selection(t, variants),
+        "stress": lambda t: stress(t),
     }
 
     def sub(m: re.Match) -> str:
@@ -430,6 +491,8 @@ def main() -> None:
     ap.add_argument("--root", default=str(ROOT / "outputs"), help="runs root of the paper protocol's artifacts")
     ap.add_argument("--check", action="store_true", help="exit 1 if docs/results.md differs from the render")
     ap.add_argument("--figures", action="store_true", help="also redraw docs/figures/<task>.png from docs/results/")
+    ap.add_argument("--collect-stress", default="", metavar="EXP",
+                    help="first write docs/results/stress-<task>.json from a run directory where `neurosym stress` ran")
     ap.add_argument("--collect-select", default="", metavar="EXP",
                     help="first write docs/results/select-<task>.json from a run directory where `neurosym select` ran")
     a = ap.parse_args()
@@ -437,10 +500,13 @@ def main() -> None:
         collect(Path(a.root))
     if a.collect_select:
         collect_select(Path(a.collect_select))
-    if a.collect or a.figures or a.collect_select:
+    if a.collect_stress:
+        collect_stress(Path(a.collect_stress))
+    if a.collect or a.figures or a.collect_select or a.collect_stress:
         draw_figures()
         for task in VARIANTS:
             draw_pareto(task)
+            draw_stress(task)
     text = render(TEMPLATE.read_text(), *load())
     target = DOCS / "results.md"
     if a.check:
