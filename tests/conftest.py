@@ -7,8 +7,11 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# at most 2 threads (CI has 2 cores); OMP_NUM_THREADS=1 when the machine is busy (oversubscribed OpenMP
-# threads spin and slow BPTT down by an order of magnitude)
+# Tests run one process per core (pytest-xdist, `addopts` in pyproject.toml): each worker, and every CLI subprocess
+# it starts (they inherit OMP_NUM_THREADS), gets one torch thread, since oversubscribed OpenMP threads spin and slow
+# BPTT down by an order of magnitude (docs/performance.md). Without workers: at most 2 threads, or OMP_NUM_THREADS.
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ["OMP_NUM_THREADS"] = "1"
 torch.set_num_threads(int(os.environ.get("OMP_NUM_THREADS", max(1, min(2, os.cpu_count() or 1)))))
 
 
