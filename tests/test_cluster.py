@@ -239,7 +239,8 @@ def test_a_sweep_job_with_a_missing_upstream_fails_alone(tmp_path):
     assert "sweep of synth: 2 jobs" in out and "1 of 2 jobs failed" in out
     results = sorted((tmp_path / "multirun/synth").glob("*/*/job_result.json"))
     outcome = {json.loads(f.read_text())["job"]: json.loads(f.read_text()) for f in results}
-    assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "degree"}
+    assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "degree", "artifact"}
+    assert outcome[0]["row"]["artifact"].endswith("random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt")
     assert not outcome[1]["ok"] and "no checkpoint" in outcome[1]["error"]
 
 
@@ -249,6 +250,7 @@ def test_sweep_comparison_table_of_a_successful_sweep(tmp_path):
     assert "sweep of synth: 2 jobs" in p.stdout and "failed" not in p.stdout
     for lam in ("lam=0.3", "lam=0.7"):
         assert lam in p.stdout
+    assert "artifact" in p.stdout and "program.txt" in p.stdout  # the table points to each job's program
     # a job whose config is invalid fails alone too (rules must stay below the team size)
     p = run(["synth", "-m", "rules=2,99", "budget=tiny", "task=random-grid"], tmp_path, check=False)
     assert p.returncode == 1 and "rules=99" in p.stdout and "1 of 2 jobs failed" in p.stdout

@@ -58,6 +58,10 @@ def _row(result: Any) -> dict[str, Any]:
                                                      ("max out-deg", "max_out")) if isinstance(result.get(m), dict)}
     keep = {k: v for k, v in result.items()
             if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
+    for k in ("program", "tree", "checkpoint", "selected"):  # where the job's artifact is: the sweep table shows it
+        if isinstance(result.get(k), str):
+            keep["artifact"] = result[k]
+            break
     if all(":" in str(k) for k in result) and result:  # pipeline: one entry per stage
         keep["stages"] = len(result)
     return keep
