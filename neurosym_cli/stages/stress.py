@@ -60,9 +60,11 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     for name in cfg.stress.baselines:
         b = dataclasses.replace(cfg, baseline=get(name), cmd="eval")
         label = paths.baseline_label(b)
+        done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:
             try:
-                r = stress_point(b, n, f)
+                r = done[(n, f)] if (n, f) in done else stress_point(b, n, f)
+                done[(n, f)] = r
             except UserError as e:  # not trained here (or no program): say so and go on with the others
                 skipped[label] = str(e)
                 log.warning("stress: skipped %s: %s", label, e)
