@@ -236,6 +236,17 @@ def test_retrain_smoke(tmp_path):
     run(["eval", "task=random-grid", "budget=tiny", "baseline=prog-retrained"], tmp_path)
     m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1/metrics.json").read_text())
     assert m["summary"]["max_in"]["mean"] <= 2.0
+    # the same rules under new comments: still the same program, nothing to do
+    prog = tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt"
+    prog.write_text("# edited by hand\n" + prog.read_text())
+    assert "already trained" in run(["retrain", "task=random-grid", "budget=tiny"], tmp_path).stdout
+    # another program under the same name: the retrained model is never resumed or reused under it
+    prog.write_text("random(filter(true, l))\nrandom(filter(true, l))\n")
+    p = run(["retrain", "task=random-grid", "budget=tiny"], tmp_path, check=False)
+    assert p.returncode == 1 and len(p.stderr.strip().splitlines()) == 1 and "overwrite=true" in p.stderr
+    assert "another program" in p.stderr
+    p = run(["eval", "task=random-grid", "budget=tiny", "baseline=prog-retrained"], tmp_path)
+    assert "made under another program" in p.stdout + p.stderr  # evaluated, but not silently
 
 
 def test_pipeline_tiny_reuses_artifacts(tmp_path):

@@ -53,6 +53,19 @@ def _provider(cfg: RunConfig) -> CommProvider:
     return make_comm(cfg.baseline.comm, cfg.rules)
 
 
+def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
+    """SHA-1 of what a retrained model is retrained under: the program's rules (comments aside) or the tree file."""
+    import hashlib
+
+    from ..dsl.printer import to_text
+
+    if cfg.baseline.comm == "tree":
+        data = paths.tree_file(cfg).read_bytes()
+    else:
+        data = to_text(comm.program).encode()  # type: ignore[attr-defined]
+    return hashlib.sha1(data).hexdigest()
+
+
 def load_baseline(cfg: RunConfig, device):
     """(policy on ``device``, env, provider) of ``cfg.baseline``: its trained weights and its communication.
     A partly trained model is used with a warning naming the command that finishes it."""
@@ -64,4 +77,8 @@ def load_baseline(cfg: RunConfig, device):
         log.warning("the model is only partly trained (step %d); using it anyway; `%s` finishes it",
                     payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
-    return policy, make_env(cfg.task, cfg.horizon), baseline_comm(cfg)
+    comm = baseline_comm(cfg)
+    if payload.get("made_under") and payload["made_under"] != comm_identity(cfg, comm):
+        log.warning("the retrained model was made under another program (or tree) than the one there now; "
+                    "`%s overwrite=true` retrains it under this one", paths.retrain_command(cfg))
+    return policy, make_env(cfg.task, cfg.horizon), comm

@@ -23,7 +23,7 @@ from ..utils.lock import run_lock
 from ..utils.tracking import Tracker, open_tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
-from .comm import baseline_comm
+from .comm import baseline_comm, comm_identity
 
 class Tracked:
     """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
@@ -73,30 +73,37 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
     env = make_env(cfg.task, cfg.horizon)
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
-                     lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr)
+                     lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
+                     made_under=comm_identity(cfg, comm))
+
 
 
 def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: int,
-              init: Callable[[], CommTransformer], verb: str, lr: float | None = None) -> dict:
+              init: Callable[[], CommTransformer], verb: str, lr: float | None = None,
+              made_under: str | None = None) -> dict:
     """Resume the run directory's checkpoint or start from ``init()``, fit, save.
 
-    Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json."""
+    Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json. ``made_under``
+    identifies the program or tree of a retraining: a checkpoint made under another one is never resumed."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,
                    detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every)
     out = paths.train_dir(cfg)
     with run_lock(out):
-        return _train_locked(cfg, info, env, comm, init, verb, spec, device, out)
+        return _train_locked(cfg, info, env, comm, init, verb, spec, device, out, made_under)
 
 
 def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: Callable[[], CommTransformer],
-                  verb: str, spec: FitSpec, device: torch.device, out) -> dict:
+                  verb: str, spec: FitSpec, device: torch.device, out, made_under: str | None = None) -> dict:
     ckpt = out / "model.pt"
     state = None
     if ckpt.exists() and not cfg.overwrite:
         payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
         check_compatible(payload["config"], cfg, info.config, ckpt)
+        if made_under and payload.get("made_under", made_under) != made_under:
+            raise ConfigError(f"{ckpt} was retrained under another program (or tree) than the one there now; "
+                              "overwrite=true retrains it under this one")
         policy = artifacts.policy_from_payload(payload)
         state = FitState(**payload["fit"])
         if state.step >= spec.steps:
@@ -112,6 +119,8 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
                     "gen_state": st.gen_state, "torch_rng": st.torch_rng}
         payload = artifacts.policy_payload(policy, cfg.model, info.config, fit_dict, done=st.step >= spec.steps)
+        if made_under:
+            payload["made_under"] = made_under
         artifacts.save_checkpoint(ckpt, payload)
         artifacts.write_csv(out / "history.csv", st.history)
 
