@@ -270,8 +270,8 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     from .. import artifacts
     from .evaluate import evaluate_baseline
 
+    points = grid(cfg)  # a bad grid is reported before a missing artifact
     artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))  # fail early
-    points = grid(cfg)
     jobs = _jobs(cfg)
     t0 = time.perf_counter()
     say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
