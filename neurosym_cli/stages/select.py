@@ -276,11 +276,10 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     t0 = time.perf_counter()
     say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
         f"features {cfg.select.features}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
-    if any(not (paths.dataset_file(p)).exists() for p in points[:1]) and jobs > 1:
-        # collect D once here: parallel jobs would each collect it
+    if jobs > 1 and not paths.dataset_file(points[0]).exists():
         from .synth import collect_dataset
 
-        collect_dataset(points[0])
+        collect_dataset(points[0])  # one D for the whole grid, collected here once (parallel jobs would each do it)
     searched = run_jobs(search_job, points, info, jobs, "program")
     t_search = time.perf_counter() - t0
     first = choose(searched)
