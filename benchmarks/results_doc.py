@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import re
 import sys
 from pathlib import Path
@@ -40,11 +39,11 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
+from neurosym_cli.stages.select import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
 TEMPLATE = DOCS / "results.template.md"
-T95 = {19: 2.093, 9: 2.262, 4: 2.776, 1: 12.706}  # two-sided 95% t quantiles by degrees of freedom
 METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree", "collisions")
 ORDER = ["tf-full", "hard-attn", "dist", "prog", "prog-retrained", "det-prog", "det-prog-retrained", "dt",
          "dt-retrained", "no-comm"]
@@ -319,11 +318,7 @@ def ms(v: dict, b: str, k: str, digits: int = 2) -> str:
 def paired(v: dict, a: str, b: str) -> tuple[float, float]:
     """Mean and 95% half-width of a - b over the evaluation seeds both share."""
     xa, xb = v["baselines"][a]["cost_per_seed"], v["baselines"][b]["cost_per_seed"]
-    d = [xa[s] - xb[s] for s in sorted(set(xa) & set(xb), key=int)]
-    n = len(d)
-    m = sum(d) / n
-    sd = math.sqrt(sum((x - m) ** 2 for x in d) / (n - 1)) if n > 1 else 0.0
-    return m, T95.get(n - 1, 1.96) * sd / math.sqrt(n)
+    return mean_ci([xa[s] - xb[s] for s in sorted(set(xa) & set(xb), key=int)])
 
 
 def pm(x: tuple[float, float], digits: int = 2) -> str:
