@@ -3,7 +3,8 @@
 Packages are cut by concept. Import layers, lowest first: a module imports from its own layer and the layers
 below it, never from above (tests/test_layers.py reads this table and checks every import, lazy ones included):
 
-    layer 0: config baselines paths overrides utils  schemas, baseline registry, artifact names, override checks
+    layer 0: errors verb_config config baselines paths overrides utils  errors, schemas, baseline registry,
+                                                 artifact names, override checks
     layer 1: dsl envs                            the program language; the batched differentiable tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode plotting viz   checkpoints; one batched rollout; a recorded episode; figures
