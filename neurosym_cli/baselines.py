@@ -31,6 +31,8 @@ BASELINES: dict[str, BaselineConfig] = {b.name: b for b in (
                    description="dt with the oracle retrained under the tree (appendix B)"),
     BaselineConfig("no-comm", "none", model="own",
                    description="a transformer trained and run with no communication (reference point)"),
+    BaselineConfig("rl", "gated", model="own", pipeline=False,
+                   description="appendix D: whom to hear as actions, by policy gradient (`neurosym rl`: rl1, rl2)"),
 )}
 """name -> baseline, in the paper's order (the order of every table)."""
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
-from .verb_config import RenderConfig, SelectConfig, StressConfig
+from .verb_config import RenderConfig, RLConfig, SelectConfig, StressConfig
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
 
@@ -244,13 +244,15 @@ class BaselineConfig:
     name: str = MISSING
     comm: str = "full"
     """communication provider (policy/comm.py): full, topk (hard-attn), nearest (dist), none (no-comm), program (prog),
-    tree (dt)"""
+    tree (dt), gated (rl: decisions as actions, policy/gated.py)"""
     det: bool = False
     """program baselines: no random rules (det-prog, paper appendix B)"""
     model: str = "oracle"
     """which weights: oracle (tf-full, hard-attn, prog), own (trained with this mask: dist, no-comm),
     retrained (the oracle fine-tuned under the program: prog-retrained, paper section 3.5)"""
     description: str = ""
+    pipeline: bool = True
+    """made and evaluated by `neurosym pipeline` unless baselines= says otherwise (rl has its own verb)"""
 
     def __post_init__(self) -> None:
         _check(self.model in ("oracle", "own", "retrained"),
@@ -312,7 +314,7 @@ class SynthConfig:
 def _registered_baselines() -> list[str]:
     from .baselines import BASELINES  # the registry builds on this module's schemas
 
-    return list(BASELINES)
+    return [name for name, b in BASELINES.items() if b.pipeline]
 
 
 @dataclass
@@ -362,6 +364,7 @@ class RunConfig:
     render: RenderConfig = field(default_factory=RenderConfig)
     select: SelectConfig = field(default_factory=SelectConfig)
     stress: StressConfig = field(default_factory=StressConfig)
+    rl: RLConfig = field(default_factory=RLConfig)
     selected: bool = False
     """take rules, lam, features and the search settings from the choice `neurosym select` recorded in
     <exp_dir>/select/selected.json (pipeline: run the selection first when there is none)"""

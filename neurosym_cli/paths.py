@@ -36,7 +36,14 @@ def model_name(cfg: RunConfig) -> str:
         return "oracle"
     if cfg.baseline.model == "retrained":
         return f"retrained-{program_tag(cfg)}"
+    if cfg.baseline.comm == "gated":
+        return f"{cfg.baseline.name}-{rl_tag(cfg)}"
     return cfg.baseline.name if cfg.baseline.comm == "none" else f"{cfg.baseline.name}-k{cfg.rules}"
+
+
+def rl_tag(cfg: RunConfig) -> str:
+    """The settings of an rl model (appendix D): cost weight, reward form, starting point, e.g. c0.1-togo-oracle."""
+    return f"c{cfg.rl.cost:g}-{'togo' if cfg.rl.shaped else 'episode'}-{cfg.rl.init}"
 
 
 def _search_variants(cfg: RunConfig) -> list[tuple[str, str]]:
@@ -81,6 +88,8 @@ def baseline_label(cfg: RunConfig) -> str:
         return f"{cfg.baseline.name}-{_search_tag(cfg)}"
     if cfg.baseline.comm == "tree":
         return f"{cfg.baseline.name}-k{cfg.rules}-{cfg.features}"
+    if cfg.baseline.comm == "gated":
+        return model_name(cfg)
     return f"{cfg.baseline.name}-k{cfg.rules}"
 
 
@@ -133,7 +142,9 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
         return retrain_command(cfg)
     own = cfg.baseline.model == "own" and not oracle
     base = cfg.baseline.name if own else "tf-full"
-    k = f" rules={cfg.rules}" if own and cfg.baseline.comm != "none" else ""
+    k = f" rules={cfg.rules}" if own and cfg.baseline.comm not in ("none", "gated") else ""
+    if own and cfg.baseline.comm == "gated":
+        k = f" rl.cost={cfg.rl.cost:g} rl.shaped={str(cfg.rl.shaped).lower()} rl.init={cfg.rl.init}"
     return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
 
 

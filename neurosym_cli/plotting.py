@@ -10,10 +10,12 @@ from .viz.draw import save_figure
 
 
 def baseline_of(label: str) -> str:
-    """The baseline an evaluation label belongs to (``prog-retrained-k2-lam0.5-v1`` -> ``prog-retrained``)."""
+    """The baseline an evaluation label belongs to (``prog-retrained-k2-lam0.5-v1`` -> ``prog-retrained``, the picks
+    ``rl1``, ``rl2`` -> ``rl``)."""
     from .baselines import BASELINES
 
-    names = [b for b in BASELINES if label == b or label.startswith(b + "-")]
+    names = [b for b in BASELINES if label == b or label.startswith(b + "-")
+             or (label.startswith(b) and label[len(b):].isdigit())]
     return max(names, key=len) if names else label
 
 

@@ -22,6 +22,8 @@ class Trajectory:
     max_degree: Tensor  # (T, B) max over agents of in + out (the paper's deg, section 2)
     mean_degree: Tensor  # (T, B) mean over agents of in + out
     collisions: Tensor  # (T, B) unordered pairs closer than the collision distance
+    logp: Tensor | None = None  # (T, B) log-probability of the step's communication decisions (rl, with grad)
+    comm_degree: Tensor | None = None  # (T, B) the degree those decisions cost (rl, with grad)
 
     def episode_metrics(self) -> dict[str, Tensor]:
         """(B,) time averages: the per-episode metrics of the evaluation protocol (docs/fidelity.md)."""
@@ -56,7 +58,8 @@ def rollout(
     """Run ``horizon`` steps from ``state``. Gradients flow through the dynamics unless torch.no_grad is active
     or ``detach_state`` cuts them between steps. ``stats=False`` skips degree and collision records (training
     needs only the cost; they are then zeros)."""
-    costs, records, cols = [], [], []
+    costs, records, cols, decisions = [], [], [], []
+    pop = getattr(comm, "pop_step", None)  # providers whose decisions are actions (policy/gated.py)
     for _ in range(horizon):
         if detach_state:
             state = state.detach()
@@ -65,13 +68,17 @@ def rollout(
         out = policy(obs, lambda logits, r: comm.select(ctx, logits, r), lambda r: comm.picks(ctx, r))
         state = env.step(state, out.action)
         costs.append(env.cost(state, out.action))
+        if pop is not None and (d := pop()) is not None:
+            decisions.append(d)
         if stats:
             with torch.no_grad():
                 records.append(torch.stack(degree_stats(out.masks)))
                 cols.append(env.collisions(state))
     cost = torch.stack(costs)  # (T, B)
+    logp, comm_degree = (torch.stack([d[0] for d in decisions]), torch.stack([d[1] for d in decisions])) \
+        if decisions else (None, None)
     if not stats:
         zero = torch.zeros_like(cost.detach())
-        return Trajectory(cost, zero, zero, zero, zero, zero)
+        return Trajectory(cost, zero, zero, zero, zero, zero, logp, comm_degree)
     s = torch.stack(records)  # (T, 4, B)
-    return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols))
+    return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols), logp, comm_degree)

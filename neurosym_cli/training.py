@@ -2,7 +2,9 @@
 
 Model-based RL by backpropagation through the differentiable dynamics: each optimizer step rolls out a batch of
 episodes, sums their (discounted) per-step losses, and backpropagates through the whole horizon. The budget is
-counted in rollouts, like the paper's "10k rollouts".
+counted in rollouts, like the paper's "10k rollouts". A provider with parameters of its own (rl, appendix D:
+communication decisions as actions) is trained in the same loop: its discrete decisions get a score-function term
+(``policy.gated.score_function_loss``) beside the backpropagated motion loss.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import torch
 from .config import BudgetConfig, OptimConfig
 from .envs.base import MultiAgentEnv, Rng, split_buckets
 from .policy.comm import CommProvider
+from .policy.gated import score_function_loss
 from .policy.transformer import CommTransformer
 from .rollout import rollout
 
@@ -32,6 +35,9 @@ class FitSpec:
     lr: float | None = None  # starting learning rate; None: optim.lr (retraining starts at optim.retrain_lr)
     detach_state: bool = False  # cut BPTT between steps (the task's choice)
     checkpoint_every: int = BudgetConfig.checkpoint_every  # optimizer steps between save() calls
+    comm_cost: float = 0.0  # rl: weight of the communication degree in the policy-gradient cost (appendix D)
+    shaped: bool = True  # rl: reward to go (True) or the whole episode's return for every decision
+    comm_lr_scale: float = 1.0  # rl: the gate's learning rate relative to the transformer's
 
     @property
     def steps(self) -> int:
@@ -56,6 +62,19 @@ class FitState:
     torch_rng: torch.Tensor | None = None
 
 
+def _clip(groups: list[dict], max_norm: float) -> float:
+    """Clip each parameter group's gradient on its own (the gate's score-function gradient is orders of magnitude
+    larger than the motion's and must not shrink it); returns the transformer's norm before clipping."""
+    norms = [float(torch.nn.utils.clip_grad_norm_(g["params"], max_norm)) for g in groups]
+    return norms[0]
+
+
+def comm_module(comm: CommProvider) -> torch.nn.Module | None:
+    """The provider's trainable module (rl's gate; through a link-failure wrapper), or None for a fixed rule."""
+    inner = getattr(comm, "inner", comm)
+    return inner if isinstance(inner, torch.nn.Module) else None
+
+
 class Reporter(Protocol):
     def update(self, step: int, total: int, metrics: dict[str, float]) -> None: ...
 
@@ -73,7 +92,12 @@ def fit(
 ) -> FitState:
     """Train ``policy`` in place under ``comm``; ``save`` is called every ``checkpoint_every`` steps and at the end."""
     state = state or FitState()
-    opt = torch.optim.Adam(policy.parameters(), lr=spec.lr_at(0))
+    gate = comm_module(comm)
+    groups = [{"params": list(policy.parameters()), "scale": 1.0}]
+    if gate is not None:
+        groups.append({"params": list(gate.parameters()), "scale": spec.comm_lr_scale})
+        gate.train()
+    opt = torch.optim.Adam([{"params": g["params"]} for g in groups], lr=spec.lr_at(0))
     if state.optimizer is not None:
         opt.load_state_dict(state.optimizer)
     if state.gen_state is not None:
@@ -86,12 +110,12 @@ def fit(
     while state.step < spec.steps:
         t0 = time.perf_counter()
         batch = min(spec.batch, spec.rollouts - state.step * spec.batch)
-        for group in opt.param_groups:
-            group["lr"] = spec.lr_at(state.step)
+        for group, g in zip(opt.param_groups, groups):
+            group["lr"] = spec.lr_at(state.step) * g["scale"]
         opt.zero_grad(set_to_none=True)
         # ROLLOUT -> LOSS -> BACKWARD, one bucket (episodes with equal N) at a time to bound memory;
         # with step_per_bucket each bucket also gets its own CLIP -> STEP (more updates for the same rollouts)
-        total_cost, n_eps, grad_norm = 0.0, 0, 0.0
+        total_cost, total_degree, n_eps, grad_norm = 0.0, 0.0, 0, 0.0
         buckets = env.reset(batch, gen)
         if spec.optim.step_per_bucket and spec.optim.min_steps_per_batch > 1:
             buckets = split_buckets(buckets, spec.optim.min_steps_per_batch)
@@ -99,21 +123,27 @@ def fit(
             traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
             denom = bucket.batch if spec.optim.step_per_bucket else batch
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
+            if traj.logp is not None:  # decisions as actions: + the score-function term of their cost
+                loss = loss + score_function_loss(traj.cost, traj.comm_degree, traj.logp, discount, spec.comm_cost,
+                                                  spec.shaped) / (denom * spec.horizon)
+                total_degree += float(traj.comm_degree.mean(0).sum())
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())
             n_eps += bucket.batch
             if spec.optim.step_per_bucket:
-                grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.optim.grad_clip))
+                grad_norm = _clip(groups, spec.optim.grad_clip)
                 opt.step()
                 opt.zero_grad(set_to_none=True)
         if not spec.optim.step_per_bucket:  # CLIP -> STEP once for the whole batch
-            grad_norm = float(torch.nn.utils.clip_grad_norm_(policy.parameters(), spec.optim.grad_clip))
+            grad_norm = _clip(groups, spec.optim.grad_clip)
             opt.step()
         state.step += 1
         # LOG
         metrics = {"step": state.step, "rollouts": min(state.step * spec.batch, spec.rollouts),
                    "loss": total_cost / n_eps, "grad_norm": grad_norm, "lr": spec.lr_at(state.step - 1),
                    "seconds": time.perf_counter() - t0}
+        if gate is not None:
+            metrics["degree"] = total_degree / n_eps  # mean over episodes of the time-averaged max degree
         state.history.append(metrics)
         reporter.update(state.step, spec.steps, metrics)
         if state.step % spec.checkpoint_every == 0 or state.step == spec.steps:

@@ -1,5 +1,6 @@
-"""Typed schemas of the verbs that read a finished run directory: render and figures, select, stress (stdlib
-only). ``config.RunConfig`` holds one of each; the schemas of training, search and evaluation live in config.py."""
+"""Typed schemas of the verbs beyond the paper's main protocol: render and figures, select, stress, and the rl
+baseline with its verb (stdlib only). ``config.RunConfig`` holds one of each; the schemas of training, search and
+evaluation live in config.py."""
 
 from __future__ import annotations
 
@@ -80,3 +81,36 @@ class StressConfig:
         _check(all(0.0 <= f < 1.0 for f in self.failure), "stress.failure must hold rates in [0, 1)")
         _check(self.seeds > 0, f"stress.seeds must be positive, got {self.seeds}")
         _check(bool(self.agents or self.failure), "stress.agents and stress.failure are both empty")
+
+
+@dataclass
+class RLConfig:
+    """The rl baseline (paper appendix D: communication decisions as actions, trained by policy gradient) and
+    `neurosym rl`, which trains it over a grid of the settings the paper tuned and picks rl1 and rl2."""
+
+    cost: float = 0.1
+    """weight of the communication cost: each step costs the task loss + cost * max_i(in_i + out_i)"""
+    shaped: bool = True
+    """true: each decision answers for the costs from its step on (reward to go); false: for the whole episode"""
+    init: str = "oracle"
+    """oracle: start from the pretrained transformer (needs `neurosym train`), for budget.retrain_rollouts;
+    scratch: a fresh transformer, for budget.train_rollouts (the oracle's own budget)"""
+    lr_scale: float = 10.0
+    """the gate's learning rate relative to the transformer's"""
+    grid_cost: list[float] = field(default_factory=lambda: [0.01, 0.1, 1.0])
+    """`neurosym rl`: the cost weights tried"""
+    grid_shaped: list[bool] = field(default_factory=lambda: [True, False])
+    """`neurosym rl`: the reward forms tried"""
+    grid_init: list[str] = field(default_factory=lambda: ["oracle"])
+    """`neurosym rl`: the starting points tried (scratch trains for the oracle's whole budget)"""
+    jobs: int = 0
+    """`neurosym rl`: settings trained at once (one process, one thread each); 0 = one per CPU"""
+
+    def __post_init__(self) -> None:
+        _check(self.cost >= 0 and all(c >= 0 for c in self.grid_cost), "rl.cost and rl.grid_cost must be >= 0")
+        _check(self.init in ("oracle", "scratch") and all(i in ("oracle", "scratch") for i in self.grid_init),
+               "rl.init and rl.grid_init must be oracle or scratch")
+        _check(self.lr_scale > 0, f"rl.lr_scale must be positive, got {self.lr_scale}")
+        _check(bool(self.grid_cost and self.grid_shaped and self.grid_init),
+               "rl.grid_cost, rl.grid_shaped and rl.grid_init must be non-empty")
+        _check(self.jobs >= 0, f"rl.jobs must be non-negative, got {self.jobs}")

@@ -9,6 +9,7 @@ from ..dsl.ast import Program
 from ..envs.features import feature_names
 from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm, with_link_failure
 from ..dsl.files import load_program
+from ..training import comm_module
 from ..utils.io import ArtifactError, read_json
 
 
@@ -50,7 +51,23 @@ def _provider(cfg: RunConfig) -> CommProvider:
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
         return TreeComm(rounds, cfg.task.kind, cfg.features)
+    if cfg.baseline.comm == "gated":
+        from ..policy.gated import GatedComm
+
+        return GatedComm(cfg.task.rounds)
     return make_comm(cfg.baseline.comm, cfg.rules)
+
+
+def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:
+    """Load an rl checkpoint's gate (``comm_state``) into ``comm``'s gate module; a fixed rule has none."""
+    gate = comm_module(comm)
+    if gate is None:
+        return
+    try:
+        gate.load_state_dict(payload["comm_state"])
+    except (KeyError, RuntimeError, TypeError) as e:
+        raise ArtifactError(f"{path} has no usable communication gate ({str(e).splitlines()[0]}); "
+                            f"`{made_by} overwrite=true` trains it again") from None
 
 
 def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
@@ -78,6 +95,9 @@ def load_baseline(cfg: RunConfig, device):
                     payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
     comm = baseline_comm(cfg)
+    load_gate(comm, payload, paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
+    if (gate := comm_module(comm)) is not None:
+        gate.to(device)
     if payload.get("made_under") and payload["made_under"] != comm_identity(cfg, comm):
         log.warning("the retrained model was made under another program (or tree) than the one there now; "
                     "`%s overwrite=true` retrains it under this one", paths.retrain_command(cfg))

@@ -16,8 +16,9 @@ from . import RunInfo
 from .comm import load_baseline
 
 
-def evaluate_baseline(cfg: RunConfig, info: RunInfo) -> dict:
-    """Mean, std and 95 % interval over seeds of every metric; per-seed rows beside them."""
+def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -> dict:
+    """Mean, std and 95 % interval over seeds of every metric; per-seed rows beside them. ``label`` names the row
+    and its directory instead of the baseline's own label (`neurosym rl`'s picks rl1, rl2)."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     policy, env, comm = load_baseline(cfg, device)
@@ -26,8 +27,8 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo) -> dict:
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
     seconds = time.perf_counter() - t0
     summary = summarize(rows)
-    label = paths.baseline_label(cfg)
-    out = paths.eval_dir(cfg)
+    out = paths.eval_dir(cfg) if label is None else paths.eval_dir(cfg).parent / label
+    label = label or paths.baseline_label(cfg)
     with run_lock(out):
         _write(cfg, info, out, label, rows, summary, seconds)
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)

@@ -38,6 +38,8 @@ def upstream(name: str) -> list[Stage]:
     b = get(name)
     # the oracle's weights (tf-full, hard-attn, programs, trees, and the start of retraining), or its own model
     need = [Stage("train", b.name if b.model == "own" else ORACLE)]
+    if b.comm == "gated":
+        need.insert(0, Stage("train", ORACLE))
     if b.comm in ("program", "tree"):
         need.append(Stage("synth", search_baseline(b)))
     if b.model == "retrained":
@@ -47,8 +49,8 @@ def upstream(name: str) -> list[Stage]:
 
 def requires(stage: Stage) -> tuple[Stage, ...]:
     """The stages ``stage`` waits for directly."""
-    if stage.verb == "train":
-        return ()
+    if stage.verb == "train":  # rl starts from the oracle (rl.init=oracle, its default)
+        return (Stage("train", ORACLE),) if get(stage.baseline).comm == "gated" else ()
     if stage.verb == "synth":
         return (Stage("train", ORACLE),)
     if stage.verb == "retrain":

@@ -106,7 +106,7 @@ def _val_file(cfg: RunConfig) -> Path:
 
 
 def validate(cfg: RunConfig) -> dict[str, Any]:
-    """Validation rows of ``cfg``'s baseline (prog or prog-retrained): per validation seed the loss and the degree.
+    """Validation rows of ``cfg``'s baseline (prog, prog-retrained, rl): per validation seed the loss and the degree.
     Reused when the file exists for the same program text, model and seeds."""
     import torch
 
@@ -115,7 +115,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     from ..utils.seeding import seed_everything
     from .comm import load_baseline
 
-    program = paths.program_file(cfg).read_text()
+    program = paths.program_file(cfg).read_text() if cfg.baseline.comm == "program" else None
     model = paths.train_dir(cfg) / "model.pt"
     stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
              "val_seeds": cfg.budget.val_seeds}
@@ -193,21 +193,23 @@ def _worker_init() -> None:
     root.setLevel(logging.INFO)
 
 
-def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
+def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo, name: Callable[[RunConfig], str]) -> dict[str, Any]:
     """A pool worker's job: its log lines name the grid point; a UserError comes back as a value."""
     from ..utils.console import set_job_prefix
 
-    set_job_prefix(point_name(cfg))
+    set_job_prefix(name(cfg))
     try:
         return fn(cfg, info)
     except UserError as e:
-        return {"name": point_name(cfg), "error": str(e)}
+        return {"name": name(cfg), "error": str(e)}
     finally:
         set_job_prefix("")
 
 
-def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what: str) -> list[dict[str, Any]]:
-    """``fn(cfg, info)`` for every config, ``jobs`` processes at once (1: in this process), in the given order."""
+def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what: str,
+             name: Callable[[RunConfig], str] = point_name) -> list[dict[str, Any]]:
+    """``fn(cfg, info)`` for every config, ``jobs`` processes at once (1: in this process), in the given order;
+    ``name`` names a config in log lines and errors."""
     t0 = time.perf_counter()
     results: dict[int, dict[str, Any]] = {}
 
@@ -220,11 +222,11 @@ def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what
 
     if jobs <= 1 or len(cfgs) == 1:
         for i, c in enumerate(cfgs):
-            done(i, _job_entry(fn, c, info))
+            done(i, _job_entry(fn, c, info, name))
     else:
         with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"),
                                  initializer=_worker_init) as pool:
-            futures = {pool.submit(_job_entry, fn, c, info): i for i, c in enumerate(cfgs)}
+            futures = {pool.submit(_job_entry, fn, c, info, name): i for i, c in enumerate(cfgs)}
             try:
                 for f in as_completed(futures):
                     done(futures[f], f.result())

@@ -16,14 +16,14 @@ from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
 from ..policy.comm import CommProvider, with_link_failure
-from ..training import FitSpec, FitState, fit
+from ..training import FitSpec, FitState, comm_module, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.tracking import Tracker, open_tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
-from .comm import baseline_comm, comm_identity
+from .comm import baseline_comm, comm_identity, load_gate
 
 class Tracked:
     """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
@@ -56,11 +56,29 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
         raise ConfigError(f"{cfg.baseline.name} is made by `neurosym retrain`, not `neurosym train`")
     if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
+    if cfg.baseline.comm == "gated":
+        return train_rl(cfg, info)
     env = make_env(cfg.task, cfg.horizon)
     comm = with_link_failure(make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules),
                              cfg.task.link_failure)
     return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
                      lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
+
+
+def train_rl(cfg: RunConfig, info: RunInfo) -> dict:
+    """The rl baseline (paper appendix D): the transformer and its communication gate trained together, the motion
+    by backpropagation, the decisions by policy gradient on the cost plus rl.cost times the degree. From the oracle
+    (rl.init=oracle) for budget.retrain_rollouts at the retraining rate, or from scratch for the oracle's budget."""
+    env = make_env(cfg.task, cfg.horizon)
+    comm = baseline_comm(cfg)
+    if cfg.rl.init == "oracle":
+        payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+        init, rollouts, lr = (lambda: artifacts.policy_from_payload(payload)), cfg.budget.retrain_rollouts, \
+            cfg.optim.retrain_lr
+    else:
+        init, rollouts, lr = (lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)), \
+            cfg.budget.train_rollouts, None
+    return train_run(cfg, info, env, comm, rollouts, init, "train", lr=lr)
 
 
 def retrain(cfg: RunConfig, info: RunInfo) -> dict:
@@ -88,7 +106,8 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,
-                   detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every)
+                   detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every,
+                   comm_cost=cfg.rl.cost, shaped=cfg.rl.shaped, comm_lr_scale=cfg.rl.lr_scale)
     out = paths.train_dir(cfg)
     with run_lock(out):
         return _train_locked(cfg, info, env, comm, init, verb, spec, device, out, made_under)
@@ -105,6 +124,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             raise ConfigError(f"{ckpt} was retrained under another program (or tree) than the one there now; "
                               "overwrite=true retrains it under this one")
         policy = artifacts.policy_from_payload(payload)
+        load_gate(comm, payload, ckpt, paths.train_command(cfg))
         state = FitState(**payload["fit"])
         if state.step >= spec.steps:
             log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
@@ -114,6 +134,9 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
     else:
         policy = init()
     policy.to(device)
+    gate = comm_module(comm)
+    if gate is not None:
+        gate.to(device)
 
     def save(st: FitState) -> None:
         fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
@@ -121,6 +144,8 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         payload = artifacts.policy_payload(policy, cfg.model, info.config, fit_dict, done=st.step >= spec.steps)
         if made_under:
             payload["made_under"] = made_under
+        if gate is not None:
+            payload["comm_state"] = gate.state_dict()
         artifacts.save_checkpoint(ckpt, payload)
         artifacts.write_csv(out / "history.csv", st.history)
 

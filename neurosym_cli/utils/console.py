@@ -79,7 +79,8 @@ class ProgressReporter:
             self.progress.stop()
 
     def update(self, step: int, total: int, metrics: Mapping[str, float]) -> None:
-        info = "  ".join(f"{k} {_fmt(v)}" for k, v in metrics.items() if k in ("rollouts", "loss", "grad_norm"))
+        shown = ("rollouts", "loss", "degree", "grad_norm")
+        info = "  ".join(f"{k} {_fmt(v)}" for k, v in metrics.items() if k in shown)
         if self.first_step is None:
             self.first_step = step - 1  # a resumed run: time left is measured from the steps of this run
         if self.progress is not None:

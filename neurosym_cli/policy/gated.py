@@ -1,0 +1,95 @@
+"""Communication decisions as actions (paper appendix D): the policy itself decides, for every ordered pair, whether
+agent i hears agent j, and learns it by policy gradient on the task cost plus a communication cost.
+
+The gate of pair (i, j) in round r is a Bernoulli decision with logit
+    u_ij = a_r l_ij + b_r + g_r(o_ij)
+where l_ij is the transformer's attention logit (the key-query score of section 3.1, detached: the gate does not
+train the transformer's keys), a_r, b_r scalars and g_r a small network of agent i's observation of j. It is as
+decentralised as the transformer: agent i decides from its own state and its own view of j. With ``a = 1, b = 0,
+g = 0`` at the start (the last layer of g starts at zero), an agent hears j with probability sigmoid(l_ij), so a gate
+started on the pretrained oracle (``rl.init=oracle``) asks first whom the oracle attends to.
+
+Training (``training.fit``) keeps the gradient of the motion through the differentiable dynamics for the sampled
+masks, and adds a score-function (REINFORCE) term for the discrete decisions (``score_function_loss``): the sum of
+the two is an unbiased estimate of the gradient of the expected discounted cost (docs/fidelity.md, 'Communication
+decisions as actions').
+"""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor, nn
+
+from ..envs.base import eye_mask
+
+
+class GatedComm(nn.Module):
+    """rl: a learned Bernoulli gate per ordered pair and round (see the module docstring). ``select`` samples the
+    mask from the bucket's random source; while gradients are enabled it also records, per step, the summed
+    log-probability of the decisions taken and the communication degree they cost (``pop_step``)."""
+
+    name = "gated"
+
+    def __init__(self, rounds: int, hidden: int = 16):
+        super().__init__()
+        self.rounds, self.hidden = rounds, hidden
+        self.scale = nn.Parameter(torch.ones(rounds))  # a_r
+        self.bias = nn.Parameter(torch.zeros(rounds))  # b_r
+        self.edge = nn.ModuleList(nn.Sequential(nn.Linear(2, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+                                  for _ in range(rounds))  # g_r(o_ij)
+        for g in self.edge:
+            nn.init.zeros_(g[-1].weight)
+            nn.init.zeros_(g[-1].bias)
+        self._logp: list[Tensor] = []
+        self._degree: list[Tensor] = []
+
+    def gate_logits(self, logits: Tensor, rel: Tensor, round: int) -> Tensor:
+        """logits (B, N, N) attention logits, rel (B, N, N, 2) observations o_ij -> (B, N, N) gate logits u_ij."""
+        r = min(round, self.rounds - 1)
+        return self.scale[r] * logits + self.bias[r] + self.edge[r](rel).squeeze(-1)
+
+    def select(self, ctx, logits: Tensor, round: int) -> Tensor:
+        u = self.gate_logits(logits, ctx.obs.rel, round)  # (B, N, N)
+        b, n, _ = u.shape
+        others = ~eye_mask(n, u.device).expand(b, n, n)
+        mask = (ctx.rng.rand(b, n, n) < torch.sigmoid(u.detach())) & others  # (B, N, N) bool: i hears j
+        if torch.is_grad_enabled():
+            logp = torch.where(mask, F.logsigmoid(u), F.logsigmoid(-u)).masked_fill(~others, 0.0)
+            self._logp.append(logp.sum((1, 2)))  # (B,) log-probability of this round's decisions
+            m = mask.float()
+            self._degree.append((m.sum(2) + m.sum(1)).amax(1))  # (B,) max_i in + out, the paper's deg
+        return mask
+
+    def picks(self, ctx, round: int) -> Tensor | None:
+        return None  # the gate needs the logits: dense path
+
+    def pop_step(self) -> tuple[Tensor, Tensor] | None:
+        """The step just rolled out: ((B,) summed log-probability of every decision of every round, (B,) degree
+        averaged over rounds), or None when nothing was recorded (no gradients); clears the record."""
+        if not self._logp:
+            return None
+        logp, deg = torch.stack(self._logp).sum(0), torch.stack(self._degree).mean(0)
+        self._logp, self._degree = [], []
+        return logp, deg
+
+
+def score_function_loss(cost: Tensor, degree: Tensor, logp: Tensor, discount: Tensor, weight: float,
+                        shaped: bool) -> Tensor:
+    """Surrogate whose gradient is the score-function estimate of the gradient of the expected cost through the
+    decisions: sum_t sum_e A_te * logp_te, the advantage A detached.
+
+    cost (T, B) task cost per step, degree (T, B) communication degree per step, logp (T, B) summed log-probability
+    of the step's decisions, discount (T,). The per-step cost is c_t = cost_t + weight * degree_t, discounted.
+    shaped: a decision at step t answers for the costs from t on (reward to go: decisions cannot change the past,
+    so dropping earlier costs keeps the estimate unbiased and lowers its variance); else for the whole episode's
+    cost (plain REINFORCE). Baseline: leave-one-out, the mean return of the bucket's other episodes at the same
+    step, independent of an episode's own decisions, so the estimate stays unbiased (none when B = 1)."""
+    c = (cost.detach() + weight * degree.detach()) * discount[:, None]  # (T, B)
+    if shaped:
+        ret = c.flip(0).cumsum(0).flip(0)  # (T, B): sum over s >= t
+    else:
+        ret = c.sum(0, keepdim=True).expand_as(c)
+    b = ret.shape[1]
+    base = (ret.sum(1, keepdim=True) - ret) / (b - 1) if b > 1 else torch.zeros_like(ret)
+    return ((ret - base) * logp).sum()
