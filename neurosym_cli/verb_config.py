@@ -95,7 +95,7 @@ class RLConfig:
     init: str = "oracle"
     """oracle: start from the pretrained transformer (needs `neurosym train`), for budget.retrain_rollouts;
     scratch: a fresh transformer, for budget.train_rollouts (the oracle's own budget)"""
-    lr_scale: float = 10.0
+    lr_scale: float = 50.0
     """the gate's learning rate relative to the transformer's"""
     grid_cost: list[float] = field(default_factory=lambda: [0.01, 0.1, 1.0])
     """`neurosym rl`: the cost weights tried"""
