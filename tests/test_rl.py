@@ -76,6 +76,22 @@ def test_degree_is_charged_and_no_decisions_are_recorded_without_gradients():
     assert isinstance(GatedComm(2).picks(ctx, 0), type(None))
 
 
+def test_the_score_function_term_trains_the_gate_alone():
+    """The gate reads the transformer's logits and the observations through a stop-gradient: the decisions' term
+    reaches no weight of the transformer, only the gate's (docs/fidelity.md, the bias taken for variance)."""
+    from neurosym_cli.policy.gated import score_function_loss
+
+    gate, logits, rel, ctx = _gate_and_inputs(16)
+    logits, rel = logits.clone().requires_grad_(), rel.clone().requires_grad_()
+    ctx.obs.rel = rel
+    gate.select(ctx, logits, 0)
+    logp, deg = gate.pop_step()
+    loss = score_function_loss(torch.randn(1, 16), deg[None], logp[None], torch.ones(1), 1.0, True)
+    loss.backward()
+    assert logits.grad is None and rel.grad is None
+    assert gate.bias.grad is not None and torch.count_nonzero(gate.bias.grad) > 0
+
+
 def _degree(tmp_path, cost):
     run(["train", "task=two-groups-cross", "budget=tiny", "baseline=rl", f"rl.cost={cost}", "rl.lr_scale=300",
          "budget.retrain_rollouts=48"], tmp_path)
