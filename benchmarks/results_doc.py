@@ -20,6 +20,8 @@ functions below (never evaluated as code):
     {{gap V A B}}            relative loss difference A vs B, in percent
     {{run KEY D}}            a figure of run.json (minutes)
     {{stress T}}             `neurosym stress` on task T: loss and degrees at other team sizes and under link failure
+    {{rl T}}                 `neurosym rl` on task T (appendix D): the grid, rl1 and rl2 beside the others, the claims
+    {{noisy T C}}            appendix E: link-failure task T (T.json, select-T.json) against its clean task C
     {{selection T}}          `neurosym select` on task T: the ranked table, the pick, its test numbers, the
                              paper's claims re-checked with it, the loss-degree Pareto front (select-T.json)
 
@@ -156,6 +158,147 @@ def collect_stress(exp: Path) -> None:
     print(f"wrote {path}")
 
 
+def collect_rl(exp: Path) -> None:
+    """<exp>/rl/grid.json, the picks' test evaluations and the training manifests -> docs/results/rl-<task>.json."""
+    grid = json.loads((exp / "rl" / "grid.json").read_text())
+    out = {k: grid[k] for k in ("task", "budget", "seed", "val_seeds", "rl1", "rl2", "rule", "settings", "seconds",
+                                "jobs")}
+    out["test"] = {}
+    for label in ("rl1", "rl2"):
+        m = json.loads((exp / "eval" / label / "metrics.json").read_text())
+        out["test"][label] = {
+            "label": label, "setting": grid[label]["name"],
+            "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
+            "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
+    oracle = json.loads((exp / "train" / "oracle" / "manifest.json").read_text())
+    out["oracle_training"] = {k: oracle[k] for k in ("rollouts", "seconds_this_run", "rollouts_per_second",
+                                                      "final_loss")}
+    path = RESULTS / f"rl-{grid['task']}.json"
+    path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {path}")
+
+
+def rl(task: str, variants: dict[str, dict]) -> str:
+    """The rl-<task>.json section (paper appendix D): the grid, the picks' test rows beside the main baselines and
+    the selected program, and the paper's claims."""
+    r = json.loads((RESULTS / f"rl-{task}.json").read_text())
+    v = variants[task]
+    sel_file = RESULTS / f"select-{task}.json"
+    vs = with_selected(v, json.loads(sel_file.read_text())) if sel_file.exists() else v
+    vs = {**vs, "baselines": {**vs["baselines"], **r["test"]}}
+    which = "selected" if sel_file.exists() else "default"
+    out = [f"Grid: cost weight {sorted({s['cost'] for s in r['settings']})}, reward to go or whole episode, "
+           f"from {sorted({s['init'] for s in r['settings']})} ({len(r['settings'])} settings), each trained for "
+           f"{r['settings'][0]['rollouts']} rollouts on the oracle of the {task} section; {r['val_seeds']} "
+           f"validation seeds; {r['seconds'] / 60:.1f} min on 2 cores ({r['jobs']} job(s)).", "",
+           "| setting | cost weight | reward | val loss ± 95 % | max in | max out | max degree | rollouts/s | pick |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for s in sorted(r["settings"], key=lambda s: s["val_loss"]):
+        out.append(f"| {s['name']} | {s['cost']:g} | {'to go' if s['shaped'] else 'episode'} | "
+                   f"{s['val_loss']:.2f} ± {s['val_loss_ci']:.2f} | {s['max_in']:.2f} | {s['max_out']:.2f} | "
+                   f"{s['max_degree']:.2f} | {s['rollouts_per_second']:.1f} | {s['pick']} |")
+    out += ["", f"Test seeds ({v['seeds']}, the same episodes as every table of this page):", "",
+            "| baseline | loss | max in-degree | max out-degree | max degree |", "|---|---|---|---|---|"]
+    rows = [b for b in ("tf-full", "hard-attn", "dist", "prog-retrained", "no-comm") if b in vs["baselines"]]
+    for b in rows + ["rl1", "rl2"]:
+        name = f"prog-retrained ({which} program)" if b == "prog-retrained" else \
+            (f"**{b}** ({r['test'][b]['setting']})" if b in r["test"] else b)
+        out.append(f"| {name} | {ms(vs, b, 'cost')} | {ms(vs, b, 'max_in')} | {ms(vs, b, 'max_out')} | "
+                   f"{ms(vs, b, 'max_degree')} |")
+    pr = "prog-retrained"
+    d1, d2 = paired(vs, "rl1", pr), paired(vs, "rl2", pr)
+    deg = {b: mean(vs, b, "max_degree") for b in ("rl1", "rl2", pr, "tf-full")}
+    ok1 = deg["rl1"] > deg[pr]
+    ok2 = d2[0] - d2[1] > 0
+    dominated = [b for b in ("rl1", "rl2") if mean(vs, b) <= mean(vs, pr) and deg[b] <= deg[pr]]
+    out += ["", "The paper's claims (appendix D):", "",
+            f"- rl1 (the lowest loss over the settings) has a much higher degree than prog-retrained: max degree "
+            f"{deg['rl1']:.2f} vs {deg[pr]:.2f} (tf-full {deg['tf-full']:.2f}); its loss against prog-retrained: "
+            f"{pm(d1)} (paired) -> {verdict(ok1)}",
+            f"- rl2 (the lowest degree) has a much higher loss than prog-retrained: {mean(vs, 'rl2'):.2f} vs "
+            f"{mean(vs, pr):.2f} (paired {pm(d2)}), at max degree {deg['rl2']:.2f} -> {verdict(ok2)}",
+            f"- the program does better than both: neither pick has both a loss and a degree at most "
+            f"prog-retrained's -> {verdict(not dominated)}"
+            + ("" if not dominated else f" ({', '.join(dominated)} does)")]
+    t = r["oracle_training"]
+    rl_rate = sum(s["rollouts_per_second"] for s in r["settings"]) / len(r["settings"])
+    out += ["", f"Cost: an rl setting trains at {rl_rate:.1f} rollouts/s (mean over the settings, one thread), the "
+            f"oracle's BPTT at {t['rollouts_per_second']:.1f} rollouts/s; from the oracle, a setting is "
+            f"{r['settings'][0]['rollouts']} rollouts ({sum(s['train_seconds'] for s in r['settings']) / len(r['settings']) / 60:.1f} "
+            f"min), the oracle itself {t['rollouts']} ({t['seconds_this_run'] / 60:.1f} min); docs/performance.md "
+            "section 11."]
+    return "\n".join(out)
+
+
+def collect_noisy(exp: Path) -> None:
+    """Appendix E: every test evaluation of a link-failure run directory (where `neurosym pipeline selected=true`
+    ran) -> docs/results/<task>.json, the variant format, programs of the selected configuration only."""
+    sel = json.loads((exp / "select" / "selected.json").read_text())
+    out: dict = {"task": sel["task"], "objective": "paper", "baselines": {}, "programs": {}, "rules": sel["rules"],
+                 "lam": sel["lam"], "features": sel["features"]}
+    for f in sorted(exp.glob("eval/*/metrics.json")):
+        m = json.loads(f.read_text())
+        if m["config"]["baseline"]["comm"] == "program" and not m["label"].endswith("-" + sel["name"]):
+            continue  # programs of other configurations
+        out["baselines"][m["baseline"]] = {
+            "label": m["label"],
+            "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
+            "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
+        out["seeds"] = m["seeds"]
+        out["link_failure"] = m["config"]["task"]["link_failure"]
+    out["programs"][sel["name"]] = (exp / "synth" / sel["name"] / "program.txt").read_text().strip()
+    path = RESULTS / f"{sel['task']}.json"
+    path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {path}: {len(out['baselines'])} baselines")
+
+
+def noisy(task: str, clean: str) -> str:
+    """Appendix E: the baselines under link failure, the selection's best program per K, the paper's claims (the
+    pick's K against the one ``clean``'s selection made without failures)."""
+    from neurosym_cli.stages.select import choose
+
+    v = json.loads((RESULTS / f"{task}.json").read_text())
+    sel = json.loads((RESULTS / f"select-{task}.json").read_text())
+    sel_clean = json.loads((RESULTS / f"select-{clean}.json").read_text())
+    pr = "prog-retrained"
+    out = [f"Every directed link fails with probability {v['link_failure']:g} at every step, in training, "
+           f"retraining and evaluation, for every baseline. The programs are the pick of `neurosym select` on this "
+           f"task's oracle (K = {sel['rules']}, lambda = {sel['lam']:g}, {sel['features']}); {v['seeds']} test "
+           "seeds; degrees count the messages delivered.", "",
+           "| baseline | loss | max in-degree | max out-degree | max degree |", "|---|---|---|---|---|"]
+    for b in ORDER:
+        if b in v["baselines"]:
+            out.append(f"| {b} | {ms(v, b, 'cost')} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
+                       f"{ms(v, b, 'max_degree')} |")
+    first = choose(sel["programs"])
+    out += ["", "The selection by K: the best program of each K on the validation seeds (prog, the oracle under "
+            "it), over the lambdas and feature maps of the grid:", "",
+            "| K | best program | val loss ± 95 % | Δ to the best ± 95 % | max degree | similar to the best |",
+            "|---|---|---|---|---|---|"]
+    for k in sorted({r["rules"] for r in first}):
+        r = min((r for r in first if r["rules"] == k), key=lambda r: r["loss_mean"])
+        out.append(f"| {k} | {r['name'].split('-coarse')[0]} | {r['loss_mean']:.2f} ± {r['loss_ci']:.2f} | "
+                   f"{r['diff']:+.2f} ± {r['diff_ci']:.2f} | {r['degree']:.2f} | {'yes' if r['similar'] else 'no'} |")
+    best = next(r for r in first if r["best"])
+    out += ["", f"The selected program (K = {sel['rules']}):", "", "```", sel["program"], "```", ""]
+    program = parse(sel["program"])
+    for rules in program.rounds:
+        out += [f"- rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
+    g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
+    ok1 = abs(g) <= 5 and mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
+    ok2 = sel["rules"] == 4
+    out += ["", "The paper's claims (appendix E):", "",
+            f"- prog-retrained has a loss similar to tf-full (within 5 %) with a lower degree: {mean(v, pr):.2f} vs "
+            f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max degree {mean(v, pr, 'max_degree'):.2f} vs "
+            f"{mean(v, 'tf-full', 'max_degree'):.2f} -> {verdict(ok1)}",
+            f"- the best policy has four rules, against two without failures: the pick has K = {sel['rules']} "
+            f"(the validation-best program K = {best['rules']}); on {clean} without failures our selection picked "
+            f"K = {sel_clean['rules']} -> {verdict(ok2)}"
+            + ("" if ok2 else f"; more rules than without failures: "
+               f"{'yes' if sel['rules'] > sel_clean['rules'] else 'no'}")]
+    return "\n".join(out)
+
+
 def _stress_cfg(st: dict):
     """What plotting.stress_plot reads of a config, from a stress result file."""
     from types import SimpleNamespace as NS
@@ -289,12 +432,17 @@ def draw_pareto(task: str) -> None:
             v["baselines"][b]["summary"]["cost"]["mean"]) for b in ORDER if b in v["baselines"]]
     pts += [(f"{b}-{sel['name'].split('-coarse')[0]} (selected)", m["summary"]["max_degree"]["mean"],
              m["summary"]["cost"]["mean"]) for b, m in sel["test"].items()]
+    rl_file = RESULTS / f"rl-{task}.json"
+    if rl_file.exists():  # the appendix-D picks, on the same test seeds
+        pts += [(b, m["summary"]["max_degree"]["mean"], m["summary"]["cost"]["mean"])
+                for b, m in json.loads(rl_file.read_text())["test"].items()]
     xy = [(d, c) for _, d, c in pts]
     front = pareto_front(xy)
     ref = (1.05 * max(x for x, _ in xy), 1.05 * max(y for _, y in xy))
     pareto_plot(pts, front, ref, dominated_area([xy[i] for i in front], ref),
                 f"{task} (paper budget, train seed 0): test loss against max degree (lower left is better),\n"
-                "every baseline and the program chosen by `neurosym select`",
+                "every baseline, the program chosen by `neurosym select`"
+                + (" and the rl picks of `neurosym rl`" if rl_file.exists() else ""),
                 DOCS / "figures" / f"{task}-pareto-selected.png")
     print(f"drew {DOCS / 'figures' / (task + '-pareto-selected.png')}")
 
@@ -466,6 +614,8 @@ def render(template: str, variants: dict[str, dict], run: dict) -> str:
         "run": lambda key, d: fmt(run[key], d),
         "selection": lambda t: selection(t, variants),
         "stress": lambda t: stress(t),
+        "rl": lambda t: rl(t, variants),
+        "noisy": lambda t, clean: noisy(t, clean),
     }
 
     def sub(m: re.Match) -> str:
@@ -490,6 +640,10 @@ def main() -> None:
                     help="first write docs/results/stress-<task>.json from a run directory where `neurosym stress` ran")
     ap.add_argument("--collect-select", default="", metavar="EXP",
                     help="first write docs/results/select-<task>.json from a run directory where `neurosym select` ran")
+    ap.add_argument("--collect-rl", default="", metavar="EXP",
+                    help="first write docs/results/rl-<task>.json from a run directory where `neurosym rl` ran")
+    ap.add_argument("--collect-noisy", default="", metavar="EXP",
+                    help="first write docs/results/<task>.json from a link-failure run directory (appendix E)")
     a = ap.parse_args()
     if a.collect:
         collect(Path(a.root))
@@ -497,7 +651,11 @@ def main() -> None:
         collect_select(Path(a.collect_select))
     if a.collect_stress:
         collect_stress(Path(a.collect_stress))
-    if a.collect or a.figures or a.collect_select or a.collect_stress:
+    if a.collect_rl:
+        collect_rl(Path(a.collect_rl))
+    if a.collect_noisy:
+        collect_noisy(Path(a.collect_noisy))
+    if a.collect or a.figures or a.collect_select or a.collect_stress or a.collect_rl:
         draw_figures()
         for task in VARIANTS:
             draw_pareto(task)

@@ -97,7 +97,7 @@ class RLConfig:
     scratch: a fresh transformer, for budget.train_rollouts (the oracle's own budget)"""
     lr_scale: float = 50.0
     """the gate's learning rate relative to the transformer's"""
-    grid_cost: list[float] = field(default_factory=lambda: [0.01, 0.1, 1.0])
+    grid_cost: list[float] = field(default_factory=lambda: [0.01, 0.1, 1.0, 10.0])
     """`neurosym rl`: the cost weights tried"""
     grid_shaped: list[bool] = field(default_factory=lambda: [True, False])
     """`neurosym rl`: the reward forms tried"""
