@@ -170,6 +170,18 @@ def collect_rl(exp: Path) -> None:
             "label": label, "setting": grid[label]["name"],
             "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
             "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
+    out["extra"] = {}  # rl models evaluated outside the grid (a setting from scratch, too costly for the grid)
+    names = {s["name"] for s in grid["settings"]}
+    for f in sorted(exp.glob("eval/rl-*/metrics.json")):
+        m = json.loads(f.read_text())
+        if m["label"] in names:
+            continue
+        man = json.loads((exp / "train" / m["label"] / "manifest.json").read_text())
+        out["extra"][m["label"]] = {
+            "label": m["label"],
+            "summary": {k: {"mean": m["summary"][k]["mean"], "std": m["summary"][k]["std"]} for k in METRICS},
+            "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]},
+            "training": {k: man[k] for k in ("rollouts", "seconds_this_run", "rollouts_per_second", "final_loss")}}
     oracle = json.loads((exp / "train" / "oracle" / "manifest.json").read_text())
     out["oracle_training"] = {k: oracle[k] for k in ("rollouts", "seconds_this_run", "rollouts_per_second",
                                                       "final_loss")}
@@ -185,12 +197,13 @@ def rl(task: str, variants: dict[str, dict]) -> str:
     v = variants[task]
     sel_file = RESULTS / f"select-{task}.json"
     vs = with_selected(v, json.loads(sel_file.read_text())) if sel_file.exists() else v
-    vs = {**vs, "baselines": {**vs["baselines"], **r["test"]}}
+    extra = r.get("extra", {})
+    vs = {**vs, "baselines": {**vs["baselines"], **r["test"], **extra}}
     which = "selected" if sel_file.exists() else "default"
     out = [f"Grid: cost weight {sorted({s['cost'] for s in r['settings']})}, reward to go or whole episode, "
            f"from {sorted({s['init'] for s in r['settings']})} ({len(r['settings'])} settings), each trained for "
            f"{r['settings'][0]['rollouts']} rollouts on the oracle of the {task} section; {r['val_seeds']} "
-           f"validation seeds; {r['seconds'] / 60:.1f} min on 2 cores ({r['jobs']} job(s)).", "",
+           f"validation seeds; {r['jobs']} setting(s) trained at a time.", "",
            "| setting | cost weight | reward | val loss ± 95 % | max in | max out | max degree | rollouts/s | pick |",
            "|---|---|---|---|---|---|---|---|---|"]
     for s in sorted(r["settings"], key=lambda s: s["val_loss"]):
@@ -200,9 +213,10 @@ def rl(task: str, variants: dict[str, dict]) -> str:
     out += ["", f"Test seeds ({v['seeds']}, the same episodes as every table of this page):", "",
             "| baseline | loss | max in-degree | max out-degree | max degree |", "|---|---|---|---|---|"]
     rows = [b for b in ("tf-full", "hard-attn", "dist", "prog-retrained", "no-comm") if b in vs["baselines"]]
-    for b in rows + ["rl1", "rl2"]:
+    for b in rows + ["rl1", "rl2"] + sorted(extra):
         name = f"prog-retrained ({which} program)" if b == "prog-retrained" else \
-            (f"**{b}** ({r['test'][b]['setting']})" if b in r["test"] else b)
+            (f"**{b}** ({r['test'][b]['setting']})" if b in r["test"] else
+             (f"{b} (outside the grid)" if b in extra else b))
         out.append(f"| {name} | {ms(vs, b, 'cost')} | {ms(vs, b, 'max_in')} | {ms(vs, b, 'max_out')} | "
                    f"{ms(vs, b, 'max_degree')} |")
     pr = "prog-retrained"
@@ -228,6 +242,13 @@ def rl(task: str, variants: dict[str, dict]) -> str:
             f"{r['settings'][0]['rollouts']} rollouts ({sum(s['train_seconds'] for s in r['settings']) / len(r['settings']) / 60:.1f} "
             f"min), the oracle itself {t['rollouts']} ({t['seconds_this_run'] / 60:.1f} min); docs/performance.md "
             "section 11."]
+    for b, e in sorted(extra.items()):
+        tr = e["training"]
+        out += ["", f"Outside the grid, `{b}` trained from a fresh transformer for the oracle's whole budget "
+                f"({tr['rollouts']} rollouts in {tr['seconds_this_run'] / 60:.1f} min, {tr['rollouts_per_second']:.1f} "
+                f"rollouts/s, final training loss {tr['final_loss']:.2f} against the oracle's "
+                f"{t['final_loss']:.2f}); on the test seeds: loss {mean(vs, b):.2f} (against tf-full {pm(paired(vs, b, 'tf-full'))}, "
+                f"paired) at max degree {mean(vs, b, 'max_degree'):.2f}."]
     return "\n".join(out)
 
 
@@ -281,8 +302,10 @@ def noisy(task: str, clean: str) -> str:
         out.append(f"| {k} | {r['name'].split('-coarse')[0]} | {r['loss_mean']:.2f} ± {r['loss_ci']:.2f} | "
                    f"{r['diff']:+.2f} ± {r['diff_ci']:.2f} | {r['degree']:.2f} | {'yes' if r['similar'] else 'no'} |")
     best = next(r for r in first if r["best"])
-    out += ["", f"The selected program (K = {sel['rules']}):", "", "```", sel["program"], "```", ""]
     program = parse(sel["program"])
+    kept = len(program.rounds[0])
+    out += ["", f"The selected program (searched with K = {sel['rules']}; {kept} rules left after simplification "
+            "dropped those that never fire on D):", "", "```", sel["program"], "```", ""]
     for rules in program.rounds:
         out += [f"- rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
     g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
@@ -292,9 +315,9 @@ def noisy(task: str, clean: str) -> str:
             f"- prog-retrained has a loss similar to tf-full (within 5 %) with a lower degree: {mean(v, pr):.2f} vs "
             f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max degree {mean(v, pr, 'max_degree'):.2f} vs "
             f"{mean(v, 'tf-full', 'max_degree'):.2f} -> {verdict(ok1)}",
-            f"- the best policy has four rules, against two without failures: the pick has K = {sel['rules']} "
-            f"(the validation-best program K = {best['rules']}); on {clean} without failures our selection picked "
-            f"K = {sel_clean['rules']} -> {verdict(ok2)}"
+            f"- the best policy has four rules, against two without failures: the pick was searched with K = "
+            f"{sel['rules']} and keeps {kept} rules (the validation-best program K = {best['rules']}); on {clean} "
+            f"without failures our selection picked K = {sel_clean['rules']} -> {verdict(ok2)}"
             + ("" if ok2 else f"; more rules than without failures: "
                f"{'yes' if sel['rules'] > sel_clean['rules'] else 'no'}")]
     return "\n".join(out)
