@@ -311,6 +311,14 @@ def noisy(task: str, clean: str) -> str:
     g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
     ok1 = abs(g) <= 5 and mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
     ok2 = sel["rules"] == 4
+    if "no-comm" in v["baselines"]:
+        def vs_none(b: str) -> str:
+            return f"{gap(v, b, 'no-comm'):+.1f} %".replace("-", "−")
+
+        out += ["", f"What communication is worth here: no-comm {mean(v, 'no-comm'):.2f}, tf-full "
+                f"{vs_none('tf-full')} against it (paired {pm(paired(v, 'tf-full', 'no-comm'))}), prog-retrained "
+                f"{vs_none(pr)} (paired {pm(paired(v, pr, 'no-comm'))}), hard-attn {vs_none('hard-attn')}, dist "
+                f"{vs_none('dist')}."]
     out += ["", "The paper's claims (appendix E):", "",
             f"- prog-retrained has a loss similar to tf-full (within 5 %) with a lower degree: {mean(v, pr):.2f} vs "
             f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max degree {mean(v, pr, 'max_degree'):.2f} vs "
@@ -318,8 +326,8 @@ def noisy(task: str, clean: str) -> str:
             f"- the best policy has four rules, against two without failures: the pick was searched with K = "
             f"{sel['rules']} and keeps {kept} rules (the validation-best program K = {best['rules']}); on {clean} "
             f"without failures our selection picked K = {sel_clean['rules']} -> {verdict(ok2)}"
-            + ("" if ok2 else f"; more rules than without failures: "
-               f"{'yes' if sel['rules'] > sel_clean['rules'] else 'no'}")]
+            + ("" if ok2 else f"; more rules than without failures: searched with K = {sel['rules']} against "
+               f"{sel_clean['rules']}, and {kept} rules kept against {len(parse(sel_clean['program']).rounds[0])}")]
     return "\n".join(out)
 
 
