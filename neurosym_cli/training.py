@@ -19,7 +19,7 @@ import torch
 from .config import BudgetConfig, OptimConfig
 from .envs.base import MultiAgentEnv, Rng, split_buckets
 from .policy.comm import CommProvider
-from .policy.gated import score_function_loss
+from .policy.gated import returns, score_function_loss
 from .policy.transformer import CommTransformer
 from .rollout import rollout
 
@@ -107,6 +107,7 @@ def fit(
     policy.train()
     discount = spec.optim.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
     rng = Rng(gen, device)
+    mean_return = None  # rl: running mean return per step, the baseline of one-episode buckets
     while state.step < spec.steps:
         t0 = time.perf_counter()
         batch = min(spec.batch, spec.rollouts - state.step * spec.batch)
@@ -125,7 +126,9 @@ def fit(
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
             if traj.logp is not None:  # decisions as actions: + the score-function term of their cost
                 loss = loss + score_function_loss(traj.cost, traj.comm_degree, traj.logp, discount, spec.comm_cost,
-                                                  spec.shaped) / (denom * spec.horizon)
+                                                  spec.shaped, mean_return) / (denom * spec.horizon)
+                ret = returns(traj.cost, traj.comm_degree, discount, spec.comm_cost, spec.shaped).mean(1)  # (T,)
+                mean_return = ret if mean_return is None else 0.9 * mean_return + 0.1 * ret
                 total_degree += float(traj.comm_degree.mean(0).sum())
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())

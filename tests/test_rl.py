@@ -93,8 +93,10 @@ def test_the_score_function_term_trains_the_gate_alone():
 
 
 def _degree(tmp_path, cost):
-    run(["train", "task=two-groups-cross", "budget=tiny", "baseline=rl", f"rl.cost={cost}", "rl.lr_scale=300",
-         "budget.retrain_rollouts=48"], tmp_path)
+    # 8 episodes per bucket, so the leave-one-out baseline acts (one-episode buckets fall back to a running mean,
+    # far noisier: the degree then wanders whatever the cost)
+    run(["train", "task=two-groups-cross", "budget=tiny", "baseline=rl", f"rl.cost={cost}", "rl.lr_scale=100",
+         "budget.retrain_rollouts=96", "budget.batch_rollouts=8", "optim.min_steps_per_batch=1"], tmp_path)
     run(["eval", "task=two-groups-cross", "budget=tiny", "baseline=rl", f"rl.cost={cost}"], tmp_path)
     m = json.loads((tmp_path / f"two-groups-cross/tiny/seed0/eval/rl-c{cost}-togo-oracle/metrics.json").read_text())
     return m["summary"]["max_degree"]["mean"]
@@ -102,11 +104,12 @@ def _degree(tmp_path, cost):
 
 def test_rl_trains_on_a_tiny_budget_and_its_degree_falls_as_the_cost_rises(tmp_path):
     run(["train", "task=two-groups-cross", "budget=tiny"], tmp_path)
-    free, cheap, dear = _degree(tmp_path, 0), _degree(tmp_path, 1), _degree(tmp_path, 30)
-    assert dear < min(free, cheap), (free, cheap, dear)
-    ckpt = torch.load(tmp_path / "two-groups-cross/tiny/seed0/train/rl-c30-togo-oracle/model.pt", weights_only=True)
+    free, dear = _degree(tmp_path, 0), _degree(tmp_path, 100)
+    # measured over 2 seeds x 1-2 threads: free 17-25, dear 0-3.6
+    assert dear < 0.5 * free, (free, dear)
+    ckpt = torch.load(tmp_path / "two-groups-cross/tiny/seed0/train/rl-c100-togo-oracle/model.pt", weights_only=True)
     assert set(ckpt["comm_state"]) >= {"scale", "bias"}  # the gate travels with the checkpoint
-    hist = (tmp_path / "two-groups-cross/tiny/seed0/train/rl-c30-togo-oracle/history.csv").read_text()
+    hist = (tmp_path / "two-groups-cross/tiny/seed0/train/rl-c100-togo-oracle/history.csv").read_text()
     assert "degree" in hist.splitlines()[0]
 
 
@@ -142,3 +145,15 @@ def test_rl_bad_settings_are_one_line(tmp_path):
         p = run(["rl", "task=two-groups-cross", "budget=tiny", bad], tmp_path, check=False)
         assert p.returncode != 0 and "Traceback" not in p.stderr, bad
         assert "rl." in p.stderr, (bad, p.stderr)
+
+
+def test_one_episode_buckets_use_the_running_mean_return_as_baseline():
+    from neurosym_cli.policy.gated import returns, score_function_loss
+
+    cost, deg, logp = torch.rand(3, 1), torch.rand(3, 1), torch.randn(3, 1)
+    ret = returns(cost, deg, torch.ones(3), 2.0, True)  # (T, 1): reward to go
+    assert torch.allclose(ret[:, 0], (cost + 2.0 * deg).flip(0).cumsum(0).flip(0)[:, 0])
+    fallback = torch.tensor([5.0, 3.0, 1.0])
+    got = score_function_loss(cost, deg, logp, torch.ones(3), 2.0, True, fallback)
+    assert torch.allclose(got, ((ret[:, 0] - fallback) * logp[:, 0]).sum())
+    assert torch.allclose(score_function_loss(cost, deg, logp, torch.ones(3), 2.0, True), (ret * logp).sum())

@@ -77,8 +77,16 @@ class GatedComm(nn.Module):
         return logp, deg
 
 
+def returns(cost: Tensor, degree: Tensor, discount: Tensor, weight: float, shaped: bool) -> Tensor:
+    """(T, B) the return each step's decisions answer for (see ``score_function_loss``), detached."""
+    c = (cost.detach() + weight * degree.detach()) * discount[:, None]  # (T, B)
+    if shaped:
+        return c.flip(0).cumsum(0).flip(0)  # (T, B): sum over s >= t
+    return c.sum(0, keepdim=True).expand_as(c)
+
+
 def score_function_loss(cost: Tensor, degree: Tensor, logp: Tensor, discount: Tensor, weight: float,
-                        shaped: bool) -> Tensor:
+                        shaped: bool, fallback: Tensor | None = None) -> Tensor:
     """Surrogate whose gradient is the score-function estimate of the gradient of the expected cost through the
     decisions: sum_t sum_e A_te * logp_te, the advantage A detached.
 
@@ -87,12 +95,12 @@ def score_function_loss(cost: Tensor, degree: Tensor, logp: Tensor, discount: Te
     shaped: a decision at step t answers for the costs from t on (reward to go: decisions cannot change the past,
     so dropping earlier costs keeps the estimate unbiased and lowers its variance); else for the whole episode's
     cost (plain REINFORCE). Baseline: leave-one-out, the mean return of the bucket's other episodes at the same
-    step, independent of an episode's own decisions, so the estimate stays unbiased (none when B = 1)."""
-    c = (cost.detach() + weight * degree.detach()) * discount[:, None]  # (T, B)
-    if shaped:
-        ret = c.flip(0).cumsum(0).flip(0)  # (T, B): sum over s >= t
-    else:
-        ret = c.sum(0, keepdim=True).expand_as(c)
+    step, independent of an episode's own decisions, so the estimate stays unbiased. With one episode in the
+    bucket, ``fallback`` (T,), the running mean return of earlier buckets (``training.fit`` keeps it), or none."""
+    ret = returns(cost, degree, discount, weight, shaped)
     b = ret.shape[1]
-    base = (ret.sum(1, keepdim=True) - ret) / (b - 1) if b > 1 else torch.zeros_like(ret)
+    if b > 1:
+        base = (ret.sum(1, keepdim=True) - ret) / (b - 1)
+    else:
+        base = torch.zeros_like(ret) if fallback is None else fallback[:, None].expand_as(ret)
     return ((ret - base) * logp).sum()
