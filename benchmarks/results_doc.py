@@ -236,9 +236,9 @@ def rl(task: str, variants: dict[str, dict]) -> str:
             + ("" if not dominated else f" ({', '.join(dominated)} does)")]
     t = r["oracle_training"]
     rl_rate = sum(s["rollouts_per_second"] for s in r["settings"]) / len(r["settings"])
-    out += ["", f"Cost: an rl setting trained at {rl_rate:.1f} rollouts/s (mean over the settings, one thread, with "
-            f"other jobs on the machine), the oracle's BPTT at {t['rollouts_per_second']:.1f} rollouts/s when it was "
-            f"trained; from the oracle, a setting is "
+    out += ["", f"Cost: an rl setting trained at {rl_rate:.1f} rollouts/s (mean over the settings, {r['jobs']} "
+            f"one-thread job(s) at a time), the oracle's BPTT at {t['rollouts_per_second']:.1f} rollouts/s when it "
+            f"was trained (one thread, another job beside it); from the oracle, a setting is "
             f"{r['settings'][0]['rollouts']} rollouts ({sum(s['train_seconds'] for s in r['settings']) / len(r['settings']) / 60:.1f} "
             f"min), the oracle itself {t['rollouts']} ({t['seconds_this_run'] / 60:.1f} min); docs/performance.md "
             "section 11."]
