@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,7 @@ from ..config import RunConfig
 from ..utils.console import clock, say
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
-from .select import _quiet, mean_ci, run_jobs, validate
+from .select import mean_ci, quiet_job, run_jobs, validate
 
 
 def grid(cfg: RunConfig) -> list[RunConfig]:
@@ -38,7 +39,7 @@ def rl_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """One setting: its model (trained or reused), then its validation rows."""
     from .train import train
 
-    cfg, info = _quiet(cfg, info)
+    cfg, info = quiet_job(cfg, info)
     info = RunInfo({**info.config, "rl": dataclasses.asdict(cfg.rl)}, True, info.log_dir)
     train(cfg, info)
     manifest = read_json(paths.train_dir(cfg) / "manifest.json")
@@ -67,12 +68,11 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """The whole comparison (module docstring); returns the picks and their test losses and degrees."""
     from .. import artifacts
     from .evaluate import evaluate_baseline
-    from .select import _jobs
 
     points = grid(cfg)
     if "oracle" in cfg.rl.grid_init:  # fail early, naming the command that makes it
         artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
-    jobs = cfg.rl.jobs or _jobs(cfg)
+    jobs = cfg.rl.jobs or (os.cpu_count() or 1)
     t0 = time.perf_counter()
     say(f"rl {cfg.task.name}: {len(points)} settings (cost {cfg.rl.grid_cost}, reward to go "
         f"{cfg.rl.grid_shaped}, init {cfg.rl.grid_init}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")

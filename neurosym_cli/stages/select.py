@@ -143,7 +143,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     return result
 
 
-def _quiet(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
+def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
     """A grid job's config: plain progress lines, no program tables (many run at once)."""
     return (dataclasses.replace(cfg, progress="plain"),
             RunInfo({**info.config, "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
@@ -154,7 +154,7 @@ def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """One grid point: its program (searched or reused), then its validation rows."""
     from .synth import synthesize
 
-    cfg, info = _quiet(cfg, info)
+    cfg, info = quiet_job(cfg, info)
     terms = synthesize(cfg, info)
     summary = read_json(paths.synth_dir(cfg) / "summary.json")
     return {"name": point_name(cfg), "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
@@ -168,7 +168,7 @@ def retrain_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     from .train import retrain
 
     cfg = dataclasses.replace(cfg, baseline=get("prog-retrained"), cmd="retrain")
-    cfg, info = _quiet(cfg, info)
+    cfg, info = quiet_job(cfg, info)
     retrain(cfg, info)
     return {"name": point_name(cfg), **_val_columns(validate(dataclasses.replace(cfg, cmd="eval")))}
 
