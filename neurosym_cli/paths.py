@@ -142,9 +142,11 @@ def train_command(cfg: RunConfig, oracle: bool = False) -> str:
         return retrain_command(cfg)
     own = cfg.baseline.model == "own" and not oracle
     base = cfg.baseline.name if own else "tf-full"
-    k = f" rules={cfg.rules}" if own and cfg.baseline.comm not in ("none", "gated") else ""
+    k = ""
     if own and cfg.baseline.comm == "gated":
         k = f" rl.cost={cfg.rl.cost:g} rl.shaped={str(cfg.rl.shaped).lower()} rl.init={cfg.rl.init}"
+    elif own and cfg.baseline.comm != "none":
+        k = f" rules={cfg.rules}"
     return f"neurosym train task={cfg.task.name} baseline={base} budget={cfg.budget.name} seed={cfg.seed}{k}"
 
 

@@ -4,7 +4,7 @@ Model-based RL by backpropagation through the differentiable dynamics: each opti
 episodes, sums their (discounted) per-step losses, and backpropagates through the whole horizon. The budget is
 counted in rollouts, like the paper's "10k rollouts". A provider with parameters of its own (rl, appendix D:
 communication decisions as actions) is trained in the same loop: its discrete decisions get a score-function term
-(``policy.gated.score_function_loss``) beside the backpropagated motion loss.
+(``policy.gated.score_function_loss``, computed here as its two parts) beside the backpropagated motion loss.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import torch
 
 from .config import BudgetConfig, OptimConfig
 from .envs.base import MultiAgentEnv, Rng, split_buckets
-from .policy.comm import CommProvider
-from .policy.gated import returns, score_function_loss
+from .policy.comm import CommProvider, comm_module
+from .policy.gated import advantage_loss, returns
 from .policy.transformer import CommTransformer
 from .rollout import rollout
 
@@ -67,12 +67,6 @@ def _clip(groups: list[dict], max_norm: float) -> float:
     larger than the motion's and must not shrink it); returns the transformer's norm before clipping."""
     norms = [float(torch.nn.utils.clip_grad_norm_(g["params"], max_norm)) for g in groups]
     return norms[0]
-
-
-def comm_module(comm: CommProvider) -> torch.nn.Module | None:
-    """The provider's trainable module (rl's gate; through a link-failure wrapper), or None for a fixed rule."""
-    inner = getattr(comm, "inner", comm)
-    return inner if isinstance(inner, torch.nn.Module) else None
 
 
 class Reporter(Protocol):
@@ -125,10 +119,9 @@ def fit(
             denom = bucket.batch if spec.optim.step_per_bucket else batch
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
             if traj.logp is not None:  # decisions as actions: + the score-function term of their cost
-                loss = loss + score_function_loss(traj.cost, traj.comm_degree, traj.logp, discount, spec.comm_cost,
-                                                  spec.shaped, mean_return) / (denom * spec.horizon)
-                ret = returns(traj.cost, traj.comm_degree, discount, spec.comm_cost, spec.shaped).mean(1)  # (T,)
-                mean_return = ret if mean_return is None else 0.9 * mean_return + 0.1 * ret
+                ret = returns(traj.cost, traj.comm_degree, discount, spec.comm_cost, spec.shaped)  # (T, B)
+                loss = loss + advantage_loss(ret, traj.logp, mean_return) / (denom * spec.horizon)
+                mean_return = ret.mean(1) if mean_return is None else 0.9 * mean_return + 0.1 * ret.mean(1)
                 total_degree += float(traj.comm_degree.mean(0).sum())
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())

@@ -175,6 +175,13 @@ class LinkFailure:
         return getattr(self.inner, name)
 
 
+def comm_module(comm: CommProvider) -> torch.nn.Module | None:
+    """The provider's trainable module (rl's gate, policy/gated.py; through a link-failure wrapper), or None for a
+    fixed rule."""
+    inner = getattr(comm, "inner", comm)
+    return inner if isinstance(inner, torch.nn.Module) else None
+
+
 def with_link_failure(comm: CommProvider, p: float) -> CommProvider:
     """``comm`` unchanged at p = 0 (no extra random draws: results stay bit-identical), else wrapped."""
     return LinkFailure(comm, p) if p > 0 else comm

@@ -97,7 +97,12 @@ def score_function_loss(cost: Tensor, degree: Tensor, logp: Tensor, discount: Te
     cost (plain REINFORCE). Baseline: leave-one-out, the mean return of the bucket's other episodes at the same
     step, independent of an episode's own decisions, so the estimate stays unbiased. With one episode in the
     bucket, ``fallback`` (T,), the running mean return of earlier buckets (``training.fit`` keeps it), or none."""
-    ret = returns(cost, degree, discount, weight, shaped)
+    return advantage_loss(returns(cost, degree, discount, weight, shaped), logp, fallback)
+
+
+def advantage_loss(ret: Tensor, logp: Tensor, fallback: Tensor | None = None) -> Tensor:
+    """sum_te (ret_te - baseline_te) logp_te for returns ret (T, B), detached, and log-probabilities logp (T, B); the
+    baseline as in ``score_function_loss``."""
     b = ret.shape[1]
     if b > 1:
         base = (ret.sum(1, keepdim=True) - ret) / (b - 1)

@@ -7,9 +7,8 @@ from .. import artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
 from ..envs.features import feature_names
-from ..policy.comm import CommProvider, ProgramComm, TreeComm, make_comm, with_link_failure
+from ..policy.comm import CommProvider, ProgramComm, TreeComm, comm_module, make_comm, with_link_failure
 from ..dsl.files import load_program
-from ..training import comm_module
 from ..utils.io import ArtifactError, read_json
 
 

@@ -15,8 +15,8 @@ from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
 from ..envs import make_env
 from ..policy import CommTransformer, make_comm
-from ..policy.comm import CommProvider, with_link_failure
-from ..training import FitSpec, FitState, comm_module, fit
+from ..policy.comm import CommProvider, comm_module, with_link_failure
+from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
