@@ -1,0 +1,146 @@
+"""Training seeds as the runs: the paper protocol with model selection, per task and training seed, resumable.
+
+    python benchmarks/run_seeds.py                          # seeds 0 1 2 of random-cross, random-grid, unlabeled-goals
+    python benchmarks/run_seeds.py --tasks random-grid --seeds 1 2
+    python benchmarks/run_seeds.py --budget tiny --out /tmp/seeds --runs /tmp/runs   # a quick dry rehearsal
+    python benchmarks/run_seeds.py --commit                 # git-commit each task-seed's result file as it lands
+
+For every (seed, task) in that order, the commands a user would type (docs/results.md, 'Model selection'):
+``neurosym train task=T budget=B seed=S`` (the oracle), ``neurosym select ...`` (the paper's 32-point grid on its
+dataset, with select's search schedule) and ``neurosym pipeline ... selected=true`` (every baseline with the
+picked K, lambda, features and search settings), with pinned CPU kernels (``ATEN_CPU_CAPABILITY=avx2``,
+``MKL_CBWR=AVX2`` before torch loads: the same numbers on AVX2 and AVX-512 machines, docs/performance.md).
+When it ends, the small result file ``docs/results/seeds/<task>-seed<S>.json`` is written from the run
+directory: each baseline's evaluation (summary and per-evaluation-seed rows), the pick and the selection's table,
+the programs, the stage times and the machine. A task-seed whose result file exists is skipped; an interrupted
+one resumes (every stage of the pipeline resumes from its checkpoints). Run directories are not kept between
+sessions; the result files are what docs/results.md and `neurosym report` over seeds read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+TASKS = ("random-cross", "random-grid", "unlabeled-goals")
+PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2"}
+KEEP_SELECT = ("name", "lam", "rules", "features", "objective", "l1", "degree_term", "loss", "degree", "max_in",
+               "max_out")
+
+
+def neurosym() -> str:
+    """The console script beside this interpreter (a venv's bin/), else the one on PATH."""
+    here = Path(sys.executable).parent / "neurosym"
+    return str(here) if here.exists() else "neurosym"
+
+
+def result_file(out: Path, task: str, seed: int) -> Path:
+    return out / f"{task}-seed{seed}.json"
+
+
+def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict:
+    """The small result file of one task-seed from its run directory (the pipeline's evaluations under the pick)."""
+    selected = json.loads((exp / "select" / "selected.json").read_text())
+    selection = json.loads((exp / "select" / "selection.json").read_text())
+    pick = {k: selected[k] for k in ("rules", "lam", "features") if k in selected}
+    baselines: dict[str, dict] = {}
+    for f in sorted(exp.glob("eval/*/metrics.json")):
+        m = json.loads(f.read_text())
+        c = m["config"]
+        if m["rules"] != pick["rules"] or c.get("program"):
+            continue  # another K (the selection's own evaluations of other grid points), or a hand-written program
+        if c["baseline"]["comm"] in ("program", "tree") and (c["lam"] != pick["lam"]
+                                                              or c["features"] != pick["features"]):
+            continue
+        if m["label"] != m["baseline"] and m["label"].split("-k")[0] != m["baseline"]:
+            continue  # rl1/rl2 and other renamed rows
+        baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
+                                    "seconds": m["seconds"]}
+    programs = {p.parent.name: p.read_text().strip() for p in sorted(exp.glob("synth/*/program.txt"))
+                if p.parent.name.endswith(f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}")
+                or f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}-" in p.parent.name}
+    timings = exp / "pipeline_timings.json"
+    return {
+        "task": task, "seed": seed, "budget": budget, "pick": pick, "selected": selected,
+        "selection": [{k: r.get(k) for k in KEEP_SELECT} for r in selection["programs"]],
+        "retrained_finalists": selection.get("retrained", []),
+        "baselines": baselines, "programs": programs,
+        "timings": json.loads(timings.read_text()) if timings.exists() else {},
+        "wall_s": round(wall_s, 1),
+        "machine": {"cpu_kernels": PIN["ATEN_CPU_CAPABILITY"], "pin": PIN, "python": platform.python_version(),
+                    "processor": platform.processor() or platform.machine(), "cores": os.cpu_count()},
+    }
+
+
+def git_commit(path: Path, message: str) -> None:
+    for attempt in range(20):  # another process may hold the index lock for a moment
+        r = subprocess.run(["git", "commit", "-q", "-m", message, "--", str(path)], cwd=path.parent, capture_output=True,
+                           text=True)
+        if r.returncode == 0 or "nothing" in r.stdout + r.stderr:
+            return
+        if "index.lock" not in r.stderr:
+            subprocess.run(["git", "add", "--", str(path)], cwd=path.parent, check=False)
+        time.sleep(3)
+    print(f"could not commit {path}", file=sys.stderr)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--budget", default="paper")
+    ap.add_argument("--jobs", type=int, default=0, help="select.jobs (0 = one per CPU)")
+    ap.add_argument("--runs", default=str(ROOT / "outputs"), help="runs root")
+    ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "seeds"), help="where result files go")
+    ap.add_argument("--commit", action="store_true", help="git-commit each result file as it is written")
+    ap.add_argument("--extra", nargs="*", default=[], help="more overrides for every pipeline (tiny rehearsals)")
+    args = ap.parse_args()
+    out, runs = Path(args.out), Path(args.runs)
+    out.mkdir(parents=True, exist_ok=True)
+    logs = runs / "logs" / "seeds"
+    logs.mkdir(parents=True, exist_ok=True)
+    env = {**os.environ, **PIN}
+    for seed in args.seeds:
+        for task in args.tasks:
+            dest = result_file(out, task, seed)
+            if dest.exists():
+                print(f"{task} seed {seed}: done ({dest})", flush=True)
+                continue
+            common = [f"task={task}", f"budget={args.budget}", f"seed={seed}", "threads=1", "plots=false",
+                      "progress=plain", f"runs_root={runs}"]
+            cmds = [[neurosym(), "train", *common],
+                    [neurosym(), "select", *common, f"select.jobs={args.jobs}", *args.extra],
+                    [neurosym(), "pipeline", *common, "selected=true"]]
+            t0 = time.time()
+            rc = 0
+            with open(logs / f"{task}-seed{seed}.log", "a") as log:
+                for cmd in cmds:
+                    print(f"{time.strftime('%H:%M:%S')} {task} seed {seed}: {' '.join(cmd)}", flush=True)
+                    log.flush()
+                    rc = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT).returncode
+                    if rc:
+                        break
+            if rc != 0:
+                print(f"{task} seed {seed}: exit {rc}; see {logs / (task + f'-seed{seed}.log')}", flush=True)
+                continue
+            exp = runs / task / args.budget / f"seed{seed}"
+            res = collect(exp, task, seed, args.budget, time.time() - t0)
+            tmp = dest.with_suffix(".tmp")
+            tmp.write_text(json.dumps(res, indent=1, sort_keys=True) + "\n")
+            tmp.replace(dest)
+            print(f"{time.strftime('%H:%M:%S')} {task} seed {seed}: {len(res['baselines'])} baselines, pick "
+                  f"{res['pick']} in {res['wall_s'] / 60:.1f} min -> {dest}", flush=True)
+            if args.commit:
+                git_commit(dest, f"docs/results/seeds: {task} training seed {seed} ({args.budget} budget, "
+                                 f"pinned kernels)")
+
+
+if __name__ == "__main__":
+    main()
