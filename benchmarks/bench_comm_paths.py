@@ -21,7 +21,7 @@ import torch
 from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import ModelConfig, TaskConfig
 from neurosym_cli.dsl.parser import parse
-from neurosym_cli.envs import Rng, make_env
+from neurosym_cli.tasks import Rng, make_task
 from neurosym_cli.policy import make_comm
 from neurosym_cli.policy.comm import ProgramComm
 from neurosym_cli.policy.transformer import CommTransformer
@@ -55,7 +55,7 @@ def task_config(name: str) -> TaskConfig:
 
 
 def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int) -> float:
-    env = make_env(task)
+    env = make_task(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, task.rounds, ModelConfig())
     g = torch.Generator().manual_seed(0)

@@ -16,10 +16,11 @@ from pathlib import Path
 
 import torch
 
-from neurosym_cli.config import CrossConfig, ModelConfig
+from neurosym_cli.config import ModelConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.dsl.parser import parse as parse_program
 from neurosym_cli.episode import protocol_episode, record_episode
-from neurosym_cli.envs import make_env
+from neurosym_cli.tasks import make_task
 from neurosym_cli.policy import CommTransformer, make_comm
 from neurosym_cli.policy.comm import ProgramComm
 from neurosym_cli.viz.animate import animate, episode_png
@@ -38,9 +39,9 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=1)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    task = CrossConfig(name="random-cross", env="random-cross", kind="formation", num_groups=4,
+    task = CrossConfig(name="random-cross", num_groups=4,
                        test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
-    env = make_env(task, 200)
+    env = make_task(task, 200)
     torch.manual_seed(0)
     policy = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
     state, gen, _ = protocol_episode(env, 5)

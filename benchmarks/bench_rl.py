@@ -22,7 +22,7 @@ import torch
 
 from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import ModelConfig
-from neurosym_cli.envs import Rng, make_env
+from neurosym_cli.tasks import Rng, make_task
 from neurosym_cli.policy import make_comm
 from neurosym_cli.policy.gated import GatedComm, score_function_loss
 from neurosym_cli.policy.transformer import CommTransformer
@@ -122,7 +122,7 @@ def main() -> None:
         return
     torch.set_num_threads(a.threads)
     task = compose_config("train", [f"task={a.task}"]).task
-    env = make_env(task)
+    env = make_task(task)
     horizon = a.horizon or task.horizon
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, task.rounds, ModelConfig())

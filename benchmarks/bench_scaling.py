@@ -27,10 +27,11 @@ import torch
 
 
 def measure(n: int, threads: int) -> dict:
-    from neurosym_cli.config import CrossConfig, ModelConfig
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.tasks.random_cross import CrossConfig
     from neurosym_cli.dsl.ast import Program
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-    from neurosym_cli.envs import Rng, make_env
+    from neurosym_cli.tasks import Rng, make_task
     from neurosym_cli.policy import CommTransformer, make_comm
     from neurosym_cli.rollout import rollout
     from neurosym_cli.synth.dataset import collect
@@ -43,7 +44,7 @@ def measure(n: int, threads: int) -> dict:
     cpu = torch.device("cpu")
     task = CrossConfig(name=f"cross-{n}", num_groups=2, agents_per_group=n // 2, group_prob=1.0,
                        box_half_width=1.25 * math.sqrt(n / 20), horizon=50)
-    env = make_env(task)
+    env = make_task(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
     out: dict = {"n": n, "pairs_per_state": n * n}
@@ -69,7 +70,7 @@ def measure(n: int, threads: int) -> dict:
     out["eval_rollouts_per_s"] = batch / (time.perf_counter() - t0)
 
     data = collect(env, pol, 10, 1, torch.Generator().manual_seed(2), cpu)  # 500 states
-    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(3), cpu)
+    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(3), cpu)
     space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), 5)
     rng = random.Random(0)
     res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, 300, 1, 0.0, 0.1, rng)

@@ -34,7 +34,7 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     from neurosym_cli import artifacts
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-    from neurosym_cli.envs import make_env
+    from neurosym_cli.tasks import make_task
     from neurosym_cli.synth.dataset import FORMAT, from_payload, subsample
     from neurosym_cli.synth.mcmc import metropolis
     from neurosym_cli.synth.objective import CachedScorer
@@ -47,13 +47,13 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     t0 = time.perf_counter()
     payload = artifacts.load_checkpoint(Path(exp) / "train/oracle/model.pt", "neurosym train")
     policy = artifacts.policy_from_payload(payload).eval()
-    env = make_env(cfg.task)
+    env = make_task(cfg.task)
     data_file = sorted(Path(exp, "synth").glob("dataset-*.pt"))[0]
     data = from_payload(artifacts.load_payload(data_file, "neurosym synth", FORMAT, "dataset"))
     cpu = torch.device("cpu")
 
     def scorer(d, g):
-        return CachedScorer(policy, env, cfg.task.kind, d, cfg.task.rounds - 1, features, lam, "paper", rules, 1,
+        return CachedScorer(policy, env, d, cfg.task.rounds - 1, features, lam, "paper", rules, 1,
                             torch.Generator().manual_seed(g), cpu)
 
     full = scorer(data, 1)

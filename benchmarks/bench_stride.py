@@ -21,10 +21,10 @@ import torch
 from pathlib import Path
 
 from neurosym_cli.artifacts import load_checkpoint, policy_from_payload
-from neurosym_cli.config import CrossConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.dsl.ast import Program
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-from neurosym_cli.envs import make_env
+from neurosym_cli.tasks import make_task
 from neurosym_cli.synth.dataset import collect
 from neurosym_cli.synth.mcmc import metropolis
 from neurosym_cli.synth.objective import CachedScorer
@@ -63,11 +63,11 @@ def main() -> None:
     torch.set_num_threads(a.threads)
     cpu = torch.device("cpu")
     pol = policy_from_payload(load_checkpoint(Path(a.oracle), "neurosym train task=random-cross budget=paper")).eval()
-    env = make_env(CrossConfig(name="random-cross"))
+    env = make_task(CrossConfig(name="random-cross"))
 
     def scorer(stride: int) -> CachedScorer:
         data = collect(env, pol, a.rollouts, stride, torch.Generator().manual_seed(0), cpu)
-        return CachedScorer(pol, env, "formation", data, 0, "v1", a.lam, "paper", a.rules, 1,
+        return CachedScorer(pol, env, data, 0, "v1", a.lam, "paper", a.rules, 1,
                             torch.Generator().manual_seed(1), cpu)
 
     sub, full = scorer(a.stride), scorer(1)

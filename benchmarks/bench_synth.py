@@ -18,10 +18,11 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, CrossConfig
+from neurosym_cli.config import ModelConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.dsl.ast import Program
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-from neurosym_cli.envs import make_env
+from neurosym_cli.tasks import make_task
 from neurosym_cli.policy import CommTransformer
 from neurosym_cli.synth.dataset import collect
 from neurosym_cli.synth.mcmc import metropolis
@@ -44,7 +45,7 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     dev = torch.device(a.device)
-    env = make_env(CrossConfig(name="random-cross"))
+    env = make_task(CrossConfig(name="random-cross"))
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(dev).eval()
     t0 = time.perf_counter()
@@ -57,7 +58,7 @@ def main() -> None:
     backends = ["numba", "torch"] if a.backend == "both" else [a.backend]
     for backend in backends:  # the same search (seed, programs) with each back-end of the cached scorer
         t0 = time.perf_counter()
-        sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", a.rules, 1,
+        sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", a.rules, 1,
                           torch.Generator().manual_seed(1), dev, backend=backend)
         space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), a.rules)
         setups[backend] = time.perf_counter() - t0

@@ -18,8 +18,9 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig
-from neurosym_cli.envs import Rng, make_env
+from neurosym_cli.config import ModelConfig, OptimConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks import Rng, make_task
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import make_comm, CommTransformer
 from neurosym_cli.training import FitSpec, fit
@@ -34,7 +35,7 @@ class Quiet:
 
 def env_steps_per_second(batch: int, steps: int = 50) -> float:
     """Episode-steps per second of reset + observe + step + cost with random actions (no policy, no grad)."""
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     g = torch.Generator().manual_seed(0)
     buckets = [b.to(DEVICE) for b in env.reset(batch, g)]
     rng = Rng(g, DEVICE)
@@ -56,7 +57,7 @@ DEVICE = torch.device("cpu")
 
 def train_rate(batch: int, rollouts: int, lr: float, lr_final: float, clip: float) -> tuple[float, CommTransformer]:
     torch.manual_seed(0)
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(DEVICE)
     spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(lr=lr, lr_final=lr_final, grad_clip=clip, step_per_bucket=True))  # with one rollout per step: one bucket
@@ -111,7 +112,7 @@ def speed(args, out: dict) -> None:
 
 def learn(args, out: dict) -> None:
     print(f"== learning: {args.learn} rollouts each, eval loss over 20 seeds (tf-full)")
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     # reference: one rollout per Adam step, lr 1e-3, no clipping (reference-implementation.md section 3.1);
     # batched: the defaults of conf/ (optim.lr 1e-2 -> 2e-4 cosine, clip 1.0, one Adam step per bucket)
     loops = {"reference": (1, 1e-3, 1e-3, 1e9), "batched": (args.batch, 1e-2, 2e-4, 1.0)}

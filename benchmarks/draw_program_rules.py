@@ -23,7 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.commands.apps import compose_config  # noqa: E402
 from neurosym_cli.dsl.parser import parse  # noqa: E402
-from neurosym_cli.envs import make_env  # noqa: E402
+from neurosym_cli.tasks import make_task  # noqa: E402
 from neurosym_cli.episode import protocol_episode, record_episode  # noqa: E402
 from neurosym_cli.policy import CommTransformer  # noqa: E402
 from neurosym_cli.policy.comm import ProgramComm  # noqa: E402
@@ -44,7 +44,7 @@ def main() -> None:
     program = parse(text)
     tag = a.tag or Path(a.program).stem
     cfg = compose_config("figures", [f"task={a.task}", "budget=paper"])
-    env = make_env(cfg.task, cfg.horizon)
+    env = make_task(cfg.task, cfg.horizon)
     torch.manual_seed(0)
     policy = CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)  # untrained: see above
     comm = ProgramComm(program, cfg.task.kind, cfg.features)

@@ -32,6 +32,7 @@ with a 95 % t-interval.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
 import sys
@@ -42,6 +43,16 @@ sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
 from neurosym_cli.stages.select import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
+
+
+@functools.lru_cache(maxsize=None)
+def vocab(task: str, features: str):
+    """The declared features of a task (their words make the readings), from its config as `neurosym` composes it."""
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.tasks import make_task
+
+    cfg = compose_config("show_program", [f"task={task}", f"features={features}"])
+    return make_task(cfg.task).features(features).vocab
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
@@ -307,7 +318,8 @@ def noisy(task: str, clean: str) -> str:
     out += ["", f"The selected program (searched with K = {sel['rules']}; {kept} rules left after simplification "
             "dropped those that never fire on D):", "", "```", sel["program"], "```", ""]
     for rules in program.rounds:
-        out += [f"- rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
+        out += [f"- rule {k}: {describe(rule, vocab(sel['task'], sel['features']))}"
+                for k, rule in enumerate(rules, start=1)]
     g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
     ok1 = abs(g) <= 5 and mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
     ok2 = sel["rules"] == 4
@@ -422,7 +434,8 @@ def selection(task: str, variants: dict[str, dict]) -> str:
     program = parse(sel["program"])
     for r, rules in enumerate(program.rounds, start=1):
         head = f"round {r}, " if program.n_rounds > 1 else ""
-        out += [f"- {head}rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
+        out += [f"- {head}rule {k}: {describe(rule, vocab(sel['task'], sel['features']))}"
+                for k, rule in enumerate(rules, start=1)]
     out.append("")
     vs = with_selected(v, sel)
     out += [f"Test seeds ({v['seeds']}, the same episodes as the table above), the pick against the default "
@@ -601,7 +614,8 @@ def section(name: str, v: dict) -> str:
         program = parse(text)
         for r, rules in enumerate(program.rounds, start=1):
             head = f"round {r}, " if program.n_rounds > 1 else ""
-            out += [f"- {head}rule {k}: {describe(rule)}" for k, rule in enumerate(rules, start=1)]
+            out += [f"- {head}rule {k}: {describe(rule, vocab(v['task'], v['features']))}"
+                    for k, rule in enumerate(rules, start=1)]
         out.append("")
     if "timings" in v:
         t = v["timings"]

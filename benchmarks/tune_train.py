@@ -12,8 +12,10 @@ import time
 
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig, GridConfig
-from neurosym_cli.envs import make_env
+from neurosym_cli.config import ModelConfig, OptimConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks.random_grid import GridConfig
+from neurosym_cli.tasks import make_task
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
 from neurosym_cli.training import FitSpec, fit
@@ -41,7 +43,7 @@ def main() -> None:
     torch.set_num_threads(a.threads)
     torch.manual_seed(0)
     dev = torch.device(a.device)
-    env = make_env(TASKS[a.task])
+    env = make_task(TASKS[a.task])
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).to(dev)
     spec = FitSpec(rollouts=a.rollouts, batch=a.batch, horizon=env.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(lr=a.lr, lr_final=a.lr_final, grad_clip=a.clip, gamma=a.gamma,

@@ -5,13 +5,13 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
 
     layer 0: errors verb_config config baselines paths overrides utils  errors, schemas, baseline registry,
                                                  artifact names, override checks
-    layer 1: dsl envs                            the program language; the batched differentiable tasks
+    layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode plotting viz   checkpoints; one batched rollout; a recorded episode; figures
     layer 4: training evaluation synth           the training loop; the evaluation protocol; program search
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
-    layer 7: cli                                 the console script
+    layer 7: cli api                             the console script; the Python API (neurosym.api)
 """
 
 __version__ = "0.1.0"

@@ -52,7 +52,8 @@ def policy_payload(policy: CommTransformer, model_cfg: ModelConfig, run_cfg: dic
     return {
         "format": CHECKPOINT_FORMAT,
         "state_dict": policy.state_dict(),
-        "arch": {"obs_dim": policy.obs_dim, "action_dim": policy.action_dim, "rounds": policy.n_rounds,
+        "arch": {"obs_dim": policy.obs_dim, "pair_dim": policy.pair_dim, "action_dim": policy.action_dim,
+                 "rounds": policy.n_rounds,
                  **asdict(model_cfg)},
         "config": run_cfg,
         "fit": fit,
@@ -62,6 +63,7 @@ def policy_payload(policy: CommTransformer, model_cfg: ModelConfig, run_cfg: dic
 
 def policy_from_payload(payload: dict[str, Any]) -> CommTransformer:
     arch = dict(payload["arch"])
-    model = CommTransformer(arch.pop("obs_dim"), arch.pop("action_dim"), arch.pop("rounds"), ModelConfig(**arch))
+    model = CommTransformer(arch.pop("obs_dim"), arch.pop("action_dim"), arch.pop("rounds"), pair_dim=arch.pop("pair_dim", 2),
+                            cfg=ModelConfig(**arch))  # checkpoints before pair_dim was recorded: 2
     model.load_state_dict(payload["state_dict"])
     return model

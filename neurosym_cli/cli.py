@@ -79,12 +79,17 @@ def _conf_dir():
     return Path(spec.origin).parent if spec and spec.origin else None
 
 
-def choices(group: str) -> list[str]:
-    """The options of a config group: the registered baselines, or the YAML files of conf/<group>/."""
+def choices(group: str, args: list[str] | None = None) -> list[str]:
+    """The options of a config group: the registered baselines; the tasks of the search path (the package's, the
+    command line's config directories, installed entry points); or the YAML files of conf/<group>/."""
     if group == "baseline":
         from neurosym_cli.baselines import BASELINES
 
         return list(BASELINES)
+    if group == "task":
+        from neurosym_cli.tasks.registry import task_choices
+
+        return task_choices(args)
     conf = _conf_dir()
     return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
 
@@ -98,7 +103,7 @@ def check_choices(args: list[str]) -> str | None:
         key, sep, value = a.partition("=")
         if not sep or key.startswith(("+", "~", "hydra")) or key not in ("task", "baseline", "budget"):
             continue
-        known = choices(key)
+        known = choices(key, args)
         if not known:
             return None
         for v in value.split(","):  # sweeps: task=a,b
@@ -270,9 +275,19 @@ def _main() -> None:
     if cmd not in COMMANDS:
         print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
         raise SystemExit(2)
+    from neurosym_cli.errors import UserError
     from neurosym_cli.overrides import check
+    from neurosym_cli.tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
 
-    bad = check_choices(rest) or check_launcher(rest) or check(rest)
+    add_import_paths(import_paths(rest))  # a user's task module, beside their config directory or in the cwd
+    bad, schemas = check_choices(rest) or check_launcher(rest), []
+    if not bad:
+        try:  # the tasks' own schemas: their keys are known to the check (and a class that does not import is one line)
+            schemas = task_schemas(rest, COMMANDS[cmd][0])
+        except UserError as e:
+            bad = str(e)
+    bad = bad or check(rest, schemas)
+    rest = force_task_keys(rest, schemas)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)

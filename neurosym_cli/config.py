@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
 from .verb_config import RenderConfig, RLConfig, SelectConfig, StressConfig
@@ -19,30 +19,20 @@ MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this m
 
 @dataclass
 class TaskConfig:
-    """What every task has (paper section 4; constants of docs/fidelity.md, 'Environments'). A task's YAML in
-    conf/task/ extends one family schema below; ``env`` names its environment, envs/<env>.py."""
+    """What every task's schema has (paper section 4). A task's schema extends this one with its own fields and
+    lives beside the task's code; a task YAML names its class by import path (``_target_``, Hydra's convention):
+    conf/task/*.yaml for the paper's tasks, the user's own config directory for theirs (docs/extending.md)."""
 
+    _target_: str = MISSING
+    """import path of the task class (``package.module.Class``, or ``package.module:Class``)"""
     name: str = MISSING
-    """task name as used on the command line (random-cross, random-grid, ...)"""
-    env: str = MISSING
-    """the environment (envs/__init__.py ENVS): random-cross, two-groups-cross, random-grid, unlabeled-goals"""
-    kind: str = MISSING
-    """feature family of the programs (envs/features.py): formation (goal vector) or unlabeled (position, goals)"""
+    """task name as used on the command line and in run directories (random-cross, random-grid, ...)"""
     agents_per_group: int = 10
-    """agents in each group (formation) or agents and goals (unlabeled)"""
+    """agents in each group (formation) or agents and goals (unlabeled); what `neurosym stress` varies"""
     horizon: int = 200
     """T: steps per episode"""
     rounds: int = 1
     """communication rounds per step (unlabeled-goals: 2, paper appendix A)"""
-    dt: float = 0.1
-    """seconds per step"""
-    v_max: float = 2.0
-    """world units per second: the speed is clipped to this norm"""
-    noise_std: float = 0.05
-    """world units: std of the Gaussian noise on relative observations o_ij"""
-    collision_dist: float = 0.1
-    """d_c, world units: pairs closer than this count as a collision (and the within-group ramp is zero beyond
-    2 d_c)"""
     detach_state: bool = False
     """cut gradients through the state between steps (reference does so for unlabeled)"""
     rules: int = 2
@@ -60,97 +50,10 @@ class TaskConfig:
 
     def __post_init__(self) -> None:
         _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
-        _check(self.rounds in (1, 2), f"task.rounds must be 1 or 2, got {self.rounds}")
+        _check(self.rounds >= 1, f"task.rounds must be at least 1, got {self.rounds}")
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
-        _check(self.noise_std >= 0.0, "task.noise_std must be non-negative")
         _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
         _check(0.0 <= self.link_failure < 1.0, f"task.link_failure must lie in [0, 1), got {self.link_failure}")
-
-
-@dataclass
-class FormationConfig(TaskConfig):
-    """Formation flying (section 4): groups fly from start boxes to goal boxes without colliding."""
-
-    kind: str = "formation"
-    ell: float = 7.0
-    """world units: distance from the origin to the group box centres (paper's l)"""
-    box_half_width: float = 1.25
-    """world units: half-width of the start and goal boxes"""
-    min_separation: float = 0.5
-    """world units: minimum distance between sampled start (and goal) points"""
-    collision_weight: float = 5.0
-    """p_c: within-group collision penalty weight"""
-    collision_inter_group_weight: float = 25.0
-    """reference code's across-group ramp weight (0 disables it; paper is silent)"""
-    collision_inter_group_dist: float = 2.0
-    """world units: across-group ramp distance"""
-
-
-@dataclass
-class CrossConfig(FormationConfig):
-    """random-cross and two-groups-cross: the groups sit on a circle of radius l and cross to the opposite box."""
-
-    env: str = "random-cross"
-    num_groups: int = 4
-    """possible groups (4 = paper random-cross, 2 = two-groups-cross)"""
-    group_prob: float = 0.33
-    """probability that each non-guaranteed group is present (paper section 4; one group always is)"""
-
-    @property
-    def max_agents(self) -> int:
-        """N of the largest episode (every group present)."""
-        return self.num_groups * self.agents_per_group
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check(self.num_groups >= 1, "task.num_groups must be positive")
-        _check(0.0 <= self.group_prob <= 1.0, "task.group_prob must lie in [0, 1]")
-
-
-@dataclass
-class GridConfig(FormationConfig):
-    """random-grid: three groups start at (-l, 0), (0, 0), (l, 0) and fly to adjacent, distinct boxes of a 3x3 grid."""
-
-    env: str = "random-grid"
-    ell: float = 14.0
-
-    @property
-    def max_agents(self) -> int:
-        """N of every episode: three groups."""
-        return 3 * self.agents_per_group
-
-
-@dataclass
-class UnlabeledConfig(TaskConfig):
-    """unlabeled-goals (section 4): N agents cover N goals with no assignment given."""
-
-    env: str = "unlabeled-goals"
-    kind: str = "unlabeled"
-    horizon: int = 100
-    rounds: int = 2
-    start_half_width: float = 2.0
-    """starts are drawn in [-w, w]^2"""
-    goal_half_width: float = 8.0
-    """goals are drawn in [-w, w]^2"""
-    start_separation: float = 1.0
-    """minimum separation between starts"""
-    goal_separation: float = 2.0
-    """minimum separation between goals"""
-    velocity: str = "paper"
-    """paper (sum_k p_k (g_k - x)) or reference (v_max * sum_k p_k unit(g_k - x))"""
-
-    @property
-    def max_agents(self) -> int:
-        """N of every episode (as many agents as goals)."""
-        return self.agents_per_group
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check(self.velocity in ("paper", "reference"), "task.velocity must be paper or reference")
-
-
-TASK_SCHEMAS: dict[str, type[TaskConfig]] = {"cross": CrossConfig, "grid": GridConfig, "unlabeled": UnlabeledConfig}
-"""schema of each task family; a task YAML names its family in its defaults list (``/cross_task_schema@_here_``)"""
 
 
 @dataclass
@@ -353,7 +256,8 @@ class RunConfig:
     <exp_dir>/tensorboard; the tensorboard extra)"""
     baselines: list[str] = field(default_factory=lambda: _registered_baselines())
     """pipeline: the baselines to make and evaluate, in order (default: every one of baselines.py, paper order)"""
-    task: TaskConfig = field(default_factory=TaskConfig)
+    task: Any = field(default_factory=dict)
+    """the task's own schema (a TaskConfig subclass named by the task class, tasks/registry.py)"""
     model: ModelConfig = field(default_factory=ModelConfig)
     optim: OptimConfig = field(default_factory=OptimConfig)
     budget: BudgetConfig = field(default_factory=BudgetConfig)
@@ -384,6 +288,13 @@ class RunConfig:
         _check(n is None or self.rules < n, f"rules={self.rules}: an agent of {self.task.name} has at most {n} - 1 "
                f"others to hear (K is also the k of hard-attn and dist)")
         _check(self.features in ("v1", "v2"), f"features must be v1 or v2, got {self.features!r}")
+
+    def record(self) -> dict:
+        """The config as written beside every artifact (JSON-safe), derived from this typed config when written:
+        there is no second copy to keep in step. Resume checks compare its typed sections (``same_sections``)."""
+        import dataclasses
+
+        return dataclasses.asdict(self)
 
     @property
     def horizon(self) -> int:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .envs.base import EnvState, MultiAgentEnv, Rng
+from .tasks.base import Rng, Task, TaskState, pairwise_distances, require
 from .policy.comm import CommContext, CommProvider
 from .policy.transformer import CommTransformer
 from .utils.seeding import STREAM_EVAL, generator
@@ -77,7 +77,7 @@ class _Recorder:
         return p
 
 
-def protocol_episode(env: MultiAgentEnv, index: int, max_seeds: int = 1000) -> tuple[EnvState, torch.Generator, int]:
+def protocol_episode(env: Task, index: int, max_seeds: int = 1000) -> tuple[TaskState, torch.Generator, int]:
     """Episode ``index`` of the evaluation protocol: (its state (B = 1), its generator, its evaluation seed)."""
     if index < 0:
         raise ValueError(f"episode must be >= 0, got {index}")
@@ -91,7 +91,7 @@ def protocol_episode(env: MultiAgentEnv, index: int, max_seeds: int = 1000) -> t
 
 
 @torch.no_grad()
-def record_episode(env: MultiAgentEnv, policy: CommTransformer, comm: CommProvider, state: EnvState,
+def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState,
                    gen: torch.Generator, device: torch.device, horizon: int | None = None) -> EpisodeRecord:
     """Roll out one episode (B = 1) as the evaluation does, keeping every step."""
     horizon = horizon or env.horizon
@@ -115,13 +115,14 @@ def record_episode(env: MultiAgentEnv, policy: CommTransformer, comm: CommProvid
         attns.append(torch.stack([a[0] for a in out.attn]).cpu())
         if rec.picked and len(rec.picked) == len(out.masks):
             picks.append(torch.stack([p[0] for p in rec.picked]).cpu())
-        d = env.true_distance(state)[0]  # (N, N), +inf on the diagonal
+        d = pairwise_distances(state.pos)[0]  # (N, N), +inf on the diagonal
         collide.append((d < dist_c).any(-1).cpu())
     policy.train(was_training)
+    scene = require(env, "scene", "drawing an episode")(state)
     return EpisodeRecord(
-        pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=state.goal[0].cpu().numpy(),
-        group=state.group[0].cpu().numpy(),
+        pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=scene.goal.cpu().numpy(),
+        group=scene.group.cpu().numpy(),
         mask=torch.stack(masks).numpy(), attn=torch.stack(attns).float().numpy(),
         picks=torch.stack(picks).numpy() if len(picks) == horizon else None,
-        cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=state.goal_order is None,
+        cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=scene.labelled,
     )

@@ -13,15 +13,15 @@ from typing import Sequence
 
 import torch
 
-from .envs.base import MultiAgentEnv, Rng, group_by_agents
+from .tasks.base import Task, Rng, group_by_agents
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer
-from .rollout import METRICS, rollout
+from .rollout import rollout
 from .utils.seeding import STREAM_EVAL, STREAM_VAL, generator
 
 
 def evaluate(
-    env: MultiAgentEnv,
+    env: Task,
     policy: CommTransformer,
     comm: CommProvider,
     seeds: Sequence[int],
@@ -37,7 +37,7 @@ def evaluate(
         eps, gens = env.test_episodes(lambda k, s=s: generator(s, stream, k))
         states += eps
         keys += [(s, g) for g in gens]
-    sums = {s: {m: 0.0 for m in METRICS} for s in seeds}
+    sums: dict[int, dict[str, float]] = {s: {} for s in seeds}
     counts = {s: 0 for s in seeds}
     was_training = policy.training
     policy.eval()
@@ -48,17 +48,17 @@ def evaluate(
             per_ep = traj.episode_metrics()
             for e, (s, _) in enumerate(bkeys):
                 counts[s] += 1
-                for m in METRICS:
-                    sums[s][m] += float(per_ep[m][e])
+                for m, v in per_ep.items():
+                    sums[s][m] = sums[s].get(m, 0.0) + float(v[e])
     policy.train(was_training)
-    return [{"seed": s, "episodes": counts[s], **{m: sums[s][m] / counts[s] for m in METRICS}} for s in seeds]
+    return [{"seed": s, "episodes": counts[s], **{m: v / counts[s] for m, v in sums[s].items()}} for s in seeds]
 
 
 def summarize(rows: Sequence[dict[str, float]]) -> dict[str, dict[str, float]]:
     """Mean, sample std (ddof 1) and a 95% normal interval half-width over seeds, per metric."""
     out = {}
     n = len(rows)
-    for m in METRICS:
+    for m in [k for k in rows[0] if k not in ("seed", "episodes")]:
         vals = [r[m] for r in rows]
         mean = sum(vals) / n
         std = math.sqrt(sum((v - mean) ** 2 for v in vals) / (n - 1)) if n > 1 else 0.0

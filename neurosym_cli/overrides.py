@@ -8,7 +8,7 @@ import dataclasses
 import difflib
 import re
 
-from .config import TASK_SCHEMAS, RunConfig
+from .config import RunConfig, TaskConfig
 
 _SCHEMAS = {f.name: type(f.default_factory()) for f in dataclasses.fields(RunConfig)  # type: ignore[misc]
             if f.name != "task" and f.default_factory is not dataclasses.MISSING
@@ -25,39 +25,41 @@ def _fields(cls) -> dict[str, str]:
     return {f.name: str(f.type) for f in dataclasses.fields(cls)}
 
 
-def known_keys() -> dict[str, str]:
-    """Every key an override may set, dotted, with its declared type (as written in config.py)."""
+def known_keys(task_schemas: list[type] | None = None) -> dict[str, str]:
+    """Every key an override may set, dotted, with its declared type (as written in the schemas); ``task.*`` keys
+    are those of the schemas of the tasks the command line runs (the base TaskConfig when none is known)."""
     top = _fields(RunConfig)
     keys = {k: t for k, t in top.items() if k not in _SECTIONS + ("task",)}
     keys.update({g: "group" for g in _GROUPS})
     for section in _SECTIONS:
         keys.update({f"{section}.{k}": t for k, t in _fields(_SCHEMAS[section]).items()})
-    for schema in TASK_SCHEMAS.values():
+    for schema in task_schemas or [TaskConfig]:
         keys.update({f"task.{k}": t for k, t in _fields(schema).items()})
     return keys
 
 
-def _type_error(value: str, kind: str) -> str | None:
-    """Why ``value`` cannot be a ``kind`` (int, float, bool), or None when it can (or cannot be judged here)."""
+def _type_error(value: str, typ: str) -> str | None:
+    """Why ``value`` cannot be a ``typ`` (int, float, bool), or None when it can (or cannot be judged here)."""
     if value.startswith(("${", "[", "{", "'", '"')) or value.startswith(_FUNCS) or value == "null":
         return None
     for part in value.split(","):  # a sweep: seed=0,1,2
         part = part.strip()
-        if kind == "int" and not _INT.fullmatch(part):
+        if typ == "int" and not _INT.fullmatch(part):
             return "an integer"
-        if kind == "float":
+        if typ == "float":
             try:
                 float(part.replace("_", ""))
             except ValueError:
                 return "a number"
-        if kind == "bool" and part.lower() not in _BOOL:
+        if typ == "bool" and part.lower() not in _BOOL:
             return "true or false"
     return None
 
 
-def check(args: list[str]) -> str | None:
-    """A one-line error for the first bad override in ``args`` (flags and Hydra's own keys are skipped), else None."""
-    keys = known_keys()
+def check(args: list[str], task_schemas: list[type] | None = None) -> str | None:
+    """A one-line error for the first bad override in ``args`` (flags and Hydra's own keys are skipped), else None.
+    ``task_schemas``: the schemas of the tasks the command line runs (their own keys are known)."""
+    keys = known_keys(task_schemas)
     for a in args:
         if a.startswith("-") or "=" not in a and not a.startswith("~"):
             continue
@@ -72,9 +74,9 @@ def check(args: list[str]) -> str | None:
             near = difflib.get_close_matches(key, list(keys), n=1, cutoff=0.6)
             hint = f"; did you mean {near[0]!r}?" if near else "; `neurosym <command> --cfg job` lists the keys"
             return f"unknown key {key!r}{hint}"
-        kind = keys[key].replace("Optional[", "").rstrip("]")
-        if kind in ("int", "float", "bool"):
-            why = _type_error(value, kind)
+        typ = keys[key].replace("Optional[", "").rstrip("]")
+        if typ in ("int", "float", "bool"):
+            why = _type_error(value, typ)
             if why:
                 return f"{a}: {key} takes {why}, not {value!r}"
     return None

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 from torch import Tensor
 
-from .envs.base import EnvState, MultiAgentEnv, Rng
+from .tasks.base import TaskState, Task, Rng
 from .policy.comm import CommContext, CommProvider
 from .policy.transformer import CommTransformer
 
@@ -21,16 +21,20 @@ class Trajectory:
     max_out: Tensor  # (T, B) max over agents of the out-degree (agents that hear it), mean over rounds
     max_degree: Tensor  # (T, B) max over agents of in + out (the paper's deg, section 2)
     mean_degree: Tensor  # (T, B) mean over agents of in + out
-    collisions: Tensor  # (T, B) unordered pairs closer than the collision distance
+    task_metrics: dict[str, Tensor] = field(default_factory=dict)  # name -> (T, B): the task's own (Task.metrics)
     logp: Tensor | None = None  # (T, B) log-probability of the step's communication decisions (rl, with grad)
     comm_degree: Tensor | None = None  # (T, B) the degree those decisions cost (rl, with grad)
 
     def episode_metrics(self) -> dict[str, Tensor]:
-        """(B,) time averages: the per-episode metrics of the evaluation protocol (docs/fidelity.md)."""
-        return {k: getattr(self, k).detach().float().mean(0) for k in METRICS}
+        """(B,) time averages: the per-episode metrics of the evaluation protocol (docs/fidelity.md): the loss and
+        degrees of every task, then the task's own metrics (collisions for the paper's tasks)."""
+        out = {k: getattr(self, k).detach().float().mean(0) for k in METRICS}
+        out.update({k: v.detach().float().mean(0) for k, v in self.task_metrics.items()})
+        return out
 
 
-METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree", "collisions")
+METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
+"""the metrics of every task and baseline; a task adds its own (``Task.metrics``)"""
 
 
 def degree_stats(masks: list[Tensor]) -> tuple[Tensor, Tensor, Tensor, Tensor]:
@@ -46,19 +50,20 @@ def degree_stats(masks: list[Tensor]) -> tuple[Tensor, Tensor, Tensor, Tensor]:
 
 
 def rollout(
-    env: MultiAgentEnv,
+    env: Task,
     policy: CommTransformer,
     comm: CommProvider,
-    state: EnvState,
+    state: TaskState,
     rng: Rng,
     horizon: int,
     detach_state: bool = False,
     stats: bool = True,
 ) -> Trajectory:
     """Run ``horizon`` steps from ``state``. Gradients flow through the dynamics unless torch.no_grad is active
-    or ``detach_state`` cuts them between steps. ``stats=False`` skips degree and collision records (training
-    needs only the cost; they are then zeros)."""
-    costs, records, cols, decisions = [], [], [], []
+    or ``detach_state`` cuts them between steps. ``stats=False`` skips the degree and task metric records
+    (training needs only the cost; degrees are then zeros)."""
+    costs, records, decisions = [], [], []
+    extra: dict[str, list[Tensor]] = {}
     pop = getattr(comm, "pop_step", None)  # providers whose decisions are actions (policy/gated.py)
     for _ in range(horizon):
         if detach_state:
@@ -73,12 +78,14 @@ def rollout(
         if stats:
             with torch.no_grad():
                 records.append(torch.stack(degree_stats(out.masks)))
-                cols.append(env.collisions(state))
+                for k, v in env.metrics(state).items():
+                    extra.setdefault(k, []).append(v)
     cost = torch.stack(costs)  # (T, B)
     logp, comm_degree = (torch.stack([d[0] for d in decisions]), torch.stack([d[1] for d in decisions])) \
         if decisions else (None, None)
     if not stats:
         zero = torch.zeros_like(cost.detach())
-        return Trajectory(cost, zero, zero, zero, zero, zero, logp, comm_degree)
+        return Trajectory(cost, zero, zero, zero, zero, {}, logp, comm_degree)
     s = torch.stack(records)  # (T, 4, B)
-    return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], torch.stack(cols), logp, comm_degree)
+    return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], {k: torch.stack(v) for k, v in extra.items()}, logp,
+                      comm_degree)

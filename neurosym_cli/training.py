@@ -17,7 +17,7 @@ from typing import Callable, Protocol
 import torch
 
 from .config import BudgetConfig, OptimConfig
-from .envs.base import MultiAgentEnv, Rng, split_buckets
+from .tasks.base import Task, Rng, split_buckets
 from .policy.comm import CommProvider, comm_module
 from .policy.gated import advantage_loss, returns
 from .policy.transformer import CommTransformer
@@ -75,7 +75,7 @@ class Reporter(Protocol):
 
 def fit(
     policy: CommTransformer,
-    env: MultiAgentEnv,
+    env: Task,
     comm: CommProvider,
     spec: FitSpec,
     gen: torch.Generator,

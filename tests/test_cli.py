@@ -166,11 +166,13 @@ def test_synth_show_program_eval_smoke(tmp_path):
     assert abs(summary["rounds"][0]["full_forward_check"] - summary["rounds"][0]["objective"]) < 1e-3
     assert (out / "trace.csv").read_text().splitlines()[0].startswith("round,step,phase,move,accepted")
     p = run(["show-program", "task=random-grid", "budget=tiny"], tmp_path)
+    from fixtures import feature_map
     from neurosym_cli.dsl import describe, rule_text
 
     flat = " ".join(p.stdout.replace("│", " ").split())  # rich pads and wraps cells; compare the words
+    vocab = feature_map("formation").vocab
     for rule in prog.rounds[0]:  # every rule, in the paper's notation and read out
-        assert rule_text(rule) in flat and describe(rule) in flat, (rule_text(rule), p.stdout)
+        assert rule_text(rule) in flat and describe(rule, vocab) in flat, (rule_text(rule), p.stdout)
     assert f"objective {summary['rounds'][0]['objective']:.4f}" in flat
     p = run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path)
     m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-k2-lam0.5-v1/metrics.json").read_text())

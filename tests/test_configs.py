@@ -9,7 +9,7 @@ from omegaconf import OmegaConf
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
 from neurosym_cli.baselines import BASELINES
 from neurosym_cli.config import ConfigError, RunConfig
-from neurosym_cli.envs import ENVS
+from neurosym_cli.tasks import ENVS
 
 CONF = Path(__file__).resolve().parents[1] / "conf"
 GROUPS = {g: sorted(p.stem for p in (CONF / g).glob("*.yaml")) for g in ("task", "budget")} | {"baseline": list(BASELINES)}

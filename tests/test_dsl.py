@@ -8,7 +8,12 @@ from hypothesis import strategies as st
 from neurosym_cli.dsl import And, ArgMaxRule, Linear, Or, Program, ProgramSyntaxError, RandomRule, TrueCond
 from neurosym_cli.dsl import Test as T
 from neurosym_cli.dsl import describe, parse, to_text
-from neurosym_cli.dsl.vocabulary import agent_level, feature_names, words
+from neurosym_cli.dsl.vocabulary import FeatureSet
+from fixtures import feature_map
+
+# every feature the paper's tasks declare (formation v2, unlabeled-goals v1): the words the readings are built of
+VOCAB = FeatureSet(tuple({f.name: f for fm in (feature_map("formation", "v2"), feature_map("unlabeled", "v1", 10))
+                          for f in fm.vocab.features}.values()))
 from neurosym_cli.dsl.interpret import program_mask, rule_picks
 
 
@@ -123,7 +128,7 @@ def test_parse_print_round_trip(p):
     assert to_text(parse(text)) == text
     for rules in p.rounds:
         for r in rules:
-            reading = describe(r)
+            reading = describe(r, VOCAB)
             # a reading says whom the rule asks, after its guard when it has one
             who = "ask a random agent" if isinstance(r, RandomRule) else "ask the"
             assert reading.startswith(who) or (reading.startswith("while ") and who in reading), reading
@@ -135,8 +140,8 @@ def test_paper_examples_read_as_written():
     p = parse(text)
     assert to_text(p) == text
     assert p.rounds[0][0] == ArgMaxRule(Linear((("d", -1.0),)), T(Linear((("theta", 1.0),)), -1.85))
-    assert describe(p.rounds[0][0]) == "ask the nearest agent whose bearing (rad) is at least -1.85"
-    assert describe(p.rounds[0][1]) == "ask a random agent at least 3.41 away"
+    assert describe(p.rounds[0][0], VOCAB) == "ask the nearest agent whose bearing (rad) is at least -1.85"
+    assert describe(p.rounds[0][1], VOCAB) == "ask a random agent at least 3.41 away"
     assert parse("random(filter(d <= 2.5, l))").rounds[0][0].cond == T(Linear((("d", -1.0),)), -2.5)
 
 
@@ -172,12 +177,13 @@ def test_every_feature_reads_with_its_subject(kind, goals, version):
     """A test on the asking agent's own state is a guard ('while my ...'); one on the other agent selects
     ('ask a random agent whose ... / within / for which ... its ...'). A score on the agent's own state ties every
     candidate, and the reading says so."""
-    for name in feature_names(kind, goals, version):
-        test = describe(parse(f"random(filter({name} >= 1.5, l))").rounds[0][0])
-        score = describe(parse(f"argmax(map({name}, filter(true, l)))").rounds[0][0])
-        if agent_level(name):
-            assert test == f"while {words(name)} is at least 1.5, ask a random agent; otherwise ask nobody"
-            assert words(name).startswith("my ")
+    vocab = feature_map(kind, version, goals).vocab
+    for name in vocab.names:
+        test = describe(parse(f"random(filter({name} >= 1.5, l))").rounds[0][0], vocab)
+        score = describe(parse(f"argmax(map({name}, filter(true, l)))").rounds[0][0], vocab)
+        if vocab.agent_level(name):
+            assert test == f"while {vocab.words(name)} is at least 1.5, ask a random agent; otherwise ask nobody"
+            assert vocab.words(name).startswith("my ")
             assert score.startswith("ask the lowest-index agent (the score, ") and "agent order" in score
         else:
             assert test.startswith("ask a random agent ") and "while" not in test, test
@@ -207,5 +213,5 @@ def test_every_feature_reads_with_its_subject(kind, goals, version):
 ])
 def test_hand_written_readings(text, reading):
     p = parse(text)
-    assert describe(p.rounds[0][0]) == reading
+    assert describe(p.rounds[0][0], VOCAB) == reading
     assert to_text(p) == text + "\n"

@@ -5,8 +5,10 @@ import math
 import pytest
 import torch
 
-from neurosym_cli.config import CrossConfig, GridConfig, UnlabeledConfig
-from neurosym_cli.envs import EnvState, RandomCrossEnv, Rng, UnlabeledGoalsEnv, make_env
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks.random_grid import GridConfig
+from neurosym_cli.tasks.unlabeled_goals import UnlabeledConfig
+from neurosym_cli.tasks import TaskState, RandomCrossTask, Rng, UnlabeledGoalsTask, make_task
 
 CROSS = CrossConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
 GRID = GridConfig(name="random-grid", ell=14.0)
@@ -14,7 +16,7 @@ UNLAB = UnlabeledConfig(name="unlabeled-goals", horizon=100, rounds=2)
 
 
 def test_cross_reset_buckets_by_agent_count(gen):
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     buckets = env.reset(64, gen)
     assert sum(b.batch for b in buckets) == 64
     ns = [b.n_agents for b in buckets]
@@ -25,7 +27,7 @@ def test_cross_reset_buckets_by_agent_count(gen):
 
 
 def test_reset_is_deterministic_given_the_generator():
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     a = env.reset(16, torch.Generator().manual_seed(3))
     b = env.reset(16, torch.Generator().manual_seed(3))
     c = env.reset(16, torch.Generator().manual_seed(4))
@@ -34,7 +36,7 @@ def test_reset_is_deterministic_given_the_generator():
 
 
 def test_cross_boxes_and_separation(gen):
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     s = env.setting("0-1-2-3", gen)
     centres = {0: (-7, 0), 1: (0, -7), 2: (7, 0), 3: (0, 7)}
     for g, (cx, cy) in centres.items():
@@ -48,7 +50,7 @@ def test_cross_boxes_and_separation(gen):
 
 
 def test_grid_goal_boxes_adjacent_and_distinct(gen):
-    env = make_env(GRID)
+    env = make_task(GRID)
     s = env.reset(500, gen)[0]
     l = 14.0
     starts = torch.tensor([[-l, 0.0], [l, 0.0], [0.0, 0.0]])
@@ -67,11 +69,11 @@ def test_grid_goal_boxes_adjacent_and_distinct(gen):
 
 def test_formation_cost_matches_hand_computation():
     cfg = CrossConfig(name="t", num_groups=2)
-    env = RandomCrossEnv(cfg)
+    env = RandomCrossTask(cfg)
     pos = torch.tensor([[[0.0, 0.0], [0.05, 0.0], [3.0, 0.0]]])
     goal = torch.tensor([[[1.0, 0.0], [0.05, 2.0], [3.0, 4.0]]])
     group = torch.tensor([[0, 0, 1]])
-    s = EnvState(pos, goal, group)
+    s = TaskState(pos, goal, group)
     dist = 1.0 + 2.0 + 4.0
     within = max(0.0, 5 * (2 - 0.05 / 0.1))  # agents 0, 1: 7.5
     across = max(0.0, 25 * (2 - 3.0 / 2.0)) + max(0.0, 25 * (2 - 2.95 / 2.0))  # (0, 2) and (1, 2)
@@ -80,21 +82,21 @@ def test_formation_cost_matches_hand_computation():
     assert math.isclose(float(got), dist + within + across, rel_tol=1e-5)
     assert float(env.collisions(s)) == 1.0  # the pair (0, 1) is closer than d_c
     cfg_off = CrossConfig(name="t", num_groups=2, collision_inter_group_weight=0.0)
-    assert math.isclose(float(RandomCrossEnv(cfg_off).cost(s, torch.zeros(1, 3, 2))), dist + within, rel_tol=1e-5)
+    assert math.isclose(float(RandomCrossTask(cfg_off).cost(s, torch.zeros(1, 3, 2))), dist + within, rel_tol=1e-5)
 
 
 def test_speed_is_clipped_and_step_integrates():
-    env = RandomCrossEnv(CrossConfig(name="t"))
-    s = EnvState(torch.zeros(1, 2, 2), torch.ones(1, 2, 2), torch.zeros(1, 2, dtype=torch.long))
+    env = RandomCrossTask(CrossConfig(name="t"))
+    s = TaskState(torch.zeros(1, 2, 2), torch.ones(1, 2, 2), torch.zeros(1, 2, dtype=torch.long))
     nxt = env.step(s, torch.tensor([[[30.0, 40.0], [0.5, 0.0]]]))
     assert torch.allclose(nxt.pos[0, 0], torch.tensor([0.12, 0.16]), atol=1e-5)  # speed 50 -> 2, times dt 0.1
     assert torch.allclose(nxt.pos[0, 1], torch.tensor([0.05, 0.0]), atol=1e-5)
 
 
 def test_observation_is_relative_and_noisy(gen):
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     s = env.setting("0", gen)
-    clean = make_env(CrossConfig(name="c", noise_std=0.0)).observe(s, Rng(gen))
+    clean = make_task(CrossConfig(name="c", noise_std=0.0)).observe(s, Rng(gen))
     assert torch.allclose(clean.rel[0, 2, 5], s.pos[0, 5] - s.pos[0, 2])  # o_ij = x_j - x_i
     assert torch.allclose(clean.agent, s.pos - s.goal)
     noisy = env.observe(s, Rng(gen))
@@ -103,7 +105,7 @@ def test_observation_is_relative_and_noisy(gen):
 
 
 def test_gradients_flow_through_the_dynamics(gen):
-    env = make_env(CROSS)
+    env = make_task(CROSS)
     s = env.setting("0-2", gen)
     actions = torch.zeros(5, 1, 20, 2, requires_grad=True)
     total = 0.0
@@ -119,7 +121,7 @@ def test_gradients_flow_through_the_dynamics(gen):
 
 
 def test_unlabeled_shapes_cost_and_ordering(gen):
-    env = UnlabeledGoalsEnv(UNLAB)
+    env = UnlabeledGoalsTask(UNLAB)
     s = env.reset(3, gen)[0]
     assert s.pos.shape == (3, 10, 2) and s.goal.shape == (3, 10, 2) and s.goal_order.shape == (3, 10, 10)
     obs = env.observe(s, Rng(gen))
@@ -144,4 +146,4 @@ def test_bad_cross_setting_is_a_config_error(bad, gen):
     from neurosym_cli.config import ConfigError
 
     with pytest.raises(ConfigError):
-        make_env(CROSS).setting(bad, gen)
+        make_task(CROSS).setting(bad, gen)

@@ -387,12 +387,13 @@ def test_other_corrupt_artifacts(tmp_path):
 def test_corrupt_dataset_is_collected_again(tmp_path):
     import torch
 
-    from neurosym_cli.config import CrossConfig, ModelConfig
-    from neurosym_cli.envs import make_env
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.tasks.random_cross import CrossConfig
+    from neurosym_cli.tasks import make_task
     from neurosym_cli.policy import CommTransformer
     from neurosym_cli.synth.dataset import load_or_collect
 
-    env = make_env(CrossConfig(name="c", horizon=4))
+    env = make_task(CrossConfig(name="c", horizon=4))
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
     path = tmp_path / "dataset.pt"
     path.write_bytes(b"\x80\x04garbage")

@@ -2,8 +2,9 @@
 
 import torch
 
-from neurosym_cli.config import ModelConfig, CrossConfig
-from neurosym_cli.envs import EnvState, Observation, Rng, make_env
+from neurosym_cli.config import ModelConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks import TaskState, Observation, Rng, make_task
 from neurosym_cli.policy import CommContext, CommTransformer, FullComm, NearestComm, NoComm, TopKComm
 from neurosym_cli.rollout import degree_stats, rollout
 
@@ -79,10 +80,10 @@ def test_empty_row_gives_zero_attention_and_finite_gradients():
 
 
 def _ctx(n=6, seed=0):
-    env = make_env(CrossConfig(name="c", noise_std=0.0))
+    env = make_task(CrossConfig(name="c", noise_std=0.0))
     g = torch.Generator().manual_seed(seed)
     pos = torch.randn(2, n, 2, generator=g) * 3
-    state = EnvState(pos, pos.clone(), torch.zeros(2, n, dtype=torch.long))
+    state = TaskState(pos, pos.clone(), torch.zeros(2, n, dtype=torch.long))
     obs = env.observe(state, Rng(g))
     return CommContext(env, state, obs, Rng(g)), torch.randn(2, n, n, generator=g)
 
@@ -120,7 +121,7 @@ def test_degree_stats_on_hand_built_graphs():
 
 
 def test_rollout_records_degrees_and_costs(gen):
-    env = make_env(CrossConfig(name="c", horizon=4, test_settings=[]))
+    env = make_task(CrossConfig(name="c", horizon=4, test_settings=[]))
     pol = _policy()
     s = env.reset(3, gen)
     for b in s:
@@ -161,7 +162,7 @@ def test_sparse_picks_path_equals_dense_path_values_and_gradients():
 
 
 def test_providers_give_picks_matching_their_masks(gen):
-    env = make_env(CrossConfig(name="random-cross", noise_std=0.0))
+    env = make_task(CrossConfig(name="random-cross", noise_std=0.0))
     s = env.reset(6, gen)[0]
     obs = env.observe(s, Rng(gen, torch.device("cpu")))
     ctx = CommContext(env, s, obs, Rng(gen, torch.device("cpu")))

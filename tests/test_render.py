@@ -13,13 +13,15 @@ PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.
 
 
 def _setup(test_settings=("0", "0-1"), horizon=12):
-    from neurosym_cli.config import CrossConfig, ModelConfig
-    from neurosym_cli.envs import make_env
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.tasks.random_cross import CrossConfig
+    from neurosym_cli.tasks import make_task
     from neurosym_cli.policy import CommTransformer
 
-    task = CrossConfig(name="two-groups-cross", env="two-groups-cross", kind="formation", num_groups=2,
+    task = CrossConfig(name="two-groups-cross", _target_="neurosym_cli.tasks.two_groups_cross.TwoGroupsCrossTask",
+                       num_groups=2,
                        agents_per_group=4, test_settings=list(test_settings))
-    env = make_env(task, horizon)
+    env = make_task(task, horizon)
     torch.manual_seed(0)
     policy = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig(width=16, ffn=32))
     return env, policy
@@ -29,7 +31,9 @@ def _program():
     from neurosym_cli.dsl.parser import parse
     from neurosym_cli.policy.comm import ProgramComm
 
-    return ProgramComm(parse(PROGRAM), "formation")
+    from fixtures import feature_map
+
+    return ProgramComm(parse(PROGRAM), feature_map("formation"))
 
 
 def test_recorded_episodes_are_the_evaluation_protocols_episodes():
@@ -76,21 +80,21 @@ def test_rule_regions_equal_the_evaluators_filter():
     """The shaded region of a rule is exactly where the DSL evaluator lets a real agent pass its filter."""
     from neurosym_cli.dsl.interpret import cond
     from neurosym_cli.dsl.parser import parse
-    from neurosym_cli.envs.features import PairFeatures
+    from fixtures import feature_map
     from neurosym_cli.viz.figures import rule_grid
 
     program = parse("random(filter(dx <= -1.0 and gd >= 2.0 or theta >= 1.0, l))\nargmax(map(-1.0*d, filter(d >= 1.5, l)))\n")
     s_i = np.array([1.5, -2.0], dtype=np.float32)  # x - g: the goal vector is (-1.5, 2.0), gd = 2.5
     origin = np.array([0.3, -0.4])
     xs, ys = np.linspace(-4, 4, 23), np.linspace(-3, 5, 19)
-    regions = rule_grid(program, 0, "formation", "v1", s_i, origin, xs, ys)
+    regions = rule_grid(program, 0, feature_map("formation"), 2, s_i, origin, xs, ys)
     gx, gy = np.meshgrid(xs, ys)
     pts = torch.tensor(np.stack([gx.ravel(), gy.ravel()], -1), dtype=torch.float32)
     n = 1 + len(pts)  # one real bucket: the asking agent and an agent at every grid point
     pos = torch.cat([torch.tensor(origin, dtype=torch.float32)[None], pts])[None]  # (1, N, 2)
     rel = pos[:, None, :, :] - pos[:, :, None, :]
     agent = torch.tensor(s_i).expand(1, n, 2)
-    feats = PairFeatures("formation", agent, rel, "v1")
+    feats = feature_map("formation").view(agent, rel)
     for rule, (keep, score) in zip(program.rounds[0], regions):
         truth = cond(rule.cond, feats)[0, 0, 1:].reshape(gy.shape).numpy()
         assert np.array_equal(keep, truth)

@@ -10,7 +10,7 @@ from test_cli import run
 
 
 def _gate_and_inputs(b, n=4, seed=0):
-    from neurosym_cli.envs.base import Rng
+    from neurosym_cli.tasks.base import Rng
     from neurosym_cli.policy.gated import GatedComm
 
     torch.manual_seed(seed)

@@ -45,11 +45,11 @@ def test_equal_degrees_go_to_the_lower_loss_and_a_single_row_is_picked():
 
 
 def test_validation_episodes_are_never_test_episodes():
-    from neurosym_cli.config import CrossConfig
-    from neurosym_cli.envs import make_env
+    from neurosym_cli.tasks.random_cross import CrossConfig
+    from neurosym_cli.tasks import make_task
     from neurosym_cli.utils.seeding import STREAM_EVAL, STREAM_VAL, generator
 
-    env = make_env(CrossConfig(name="random-cross", agents_per_group=3), 5)
+    env = make_task(CrossConfig(name="random-cross", agents_per_group=3), 5)
     starts = {}
     for split, stream in (("test", STREAM_EVAL), ("val", STREAM_VAL)):
         for s in range(20):

@@ -9,12 +9,12 @@ from test_cli import run
 
 def _ctx(b=64, seed=0):
     """A random-grid bucket: b episodes of 3 groups of 4 agents (every episode has N = 12)."""
-    from neurosym_cli.config import GridConfig
-    from neurosym_cli.envs import make_env
-    from neurosym_cli.envs.base import Rng
+    from neurosym_cli.tasks.random_grid import GridConfig
+    from neurosym_cli.tasks import make_task
+    from neurosym_cli.tasks.base import Rng
     from neurosym_cli.policy.comm import CommContext
 
-    env = make_env(GridConfig(name="random-grid", agents_per_group=4), 5)
+    env = make_task(GridConfig(name="random-grid", agents_per_group=4), 5)
     g = torch.Generator().manual_seed(seed)
     (state,) = env.reset(b, g)
     rng = Rng(g)
@@ -53,15 +53,16 @@ def test_picks_lose_failed_messages_and_degrees_count_what_was_delivered():
 
 
 def test_failure_zero_is_the_same_provider_and_the_same_numbers():
-    from neurosym_cli.config import CrossConfig, ModelConfig
-    from neurosym_cli.envs import make_env
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.tasks.random_cross import CrossConfig
+    from neurosym_cli.tasks import make_task
     from neurosym_cli.evaluation import evaluate
     from neurosym_cli.policy import CommTransformer
     from neurosym_cli.policy.comm import FullComm, NearestComm, with_link_failure
 
     c = NearestComm(2)
     assert with_link_failure(c, 0.0) is c  # no wrapper: no extra random draws, results bit-identical
-    env = make_env(CrossConfig(name="random-cross", agents_per_group=3), 6)
+    env = make_task(CrossConfig(name="random-cross", agents_per_group=3), 6)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
     a = evaluate(env, pol, FullComm(), [0, 1], torch.device("cpu"))

@@ -5,11 +5,13 @@ import random
 import pytest
 import torch
 
-from neurosym_cli.config import ModelConfig, CrossConfig, UnlabeledConfig
+from neurosym_cli.config import ModelConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks.unlabeled_goals import UnlabeledConfig
 from neurosym_cli.dsl import ArgMaxRule, Linear, Program, RandomRule, TrueCond
 from neurosym_cli.dsl.interpret import picks_to_mask, rule_picks
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-from neurosym_cli.envs import Observation, make_env
+from neurosym_cli.tasks import Observation, make_task
 from neurosym_cli.policy import CommTransformer
 from neurosym_cli.synth.dataset import DataBucket, collect
 from neurosym_cli.synth.mcmc import metropolis, phases
@@ -21,7 +23,7 @@ CPU = torch.device("cpu")
 
 def _setup(task=None, rounds=1, rollouts=6):
     task = task or CrossConfig(name="random-cross", horizon=12)
-    env = make_env(task)
+    env = make_task(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, rounds, ModelConfig()).eval()
     data = collect(env, pol, rollouts, 2, torch.Generator().manual_seed(0), CPU)
@@ -54,7 +56,7 @@ def test_dataset_shapes():
 
 def test_incremental_scoring_equals_full_scoring():
     env, pol, data = _setup()
-    sc = CachedScorer(pol, env, "formation", data, 0, "v2", 0.5, "paper", 3, 2, torch.Generator().manual_seed(1), CPU)
+    sc = CachedScorer(pol, env, data, 0, "v2", 0.5, "paper", 3, 2, torch.Generator().manual_seed(1), CPU)
     space = _space(sc, 3)
     rng = random.Random(0)
     rules = random_rules(space, rng)
@@ -76,7 +78,7 @@ def test_random_rules_at_different_positions_are_independent():
     """Two copies of `random(filter(true, l))` pick independently, as at run time: in-degree 2 where the draws
     differ (shared random numbers would make the second copy a duplicate and the in-degree always 1)."""
     env, pol, data = _setup()
-    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU)
+    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU)
     rule = RandomRule(TrueCond())
     a, b = sc.picks_of(rule, 0), sc.picks_of(rule, 1)
     same = sum(int((x == y).sum()) for x, y in zip(a, b))
@@ -93,7 +95,7 @@ def test_incremental_scoring_two_rounds():
     task = UnlabeledConfig(name="u", horizon=6, rounds=2, agents_per_group=5)
     env, pol, data = _setup(task, rounds=2, rollouts=3)
     for r in (0, 1):
-        sc = CachedScorer(pol, env, "unlabeled", data, r, "v1", 0.7, "hinge", 2, 1, torch.Generator().manual_seed(1),
+        sc = CachedScorer(pol, env, data, r, "v1", 0.7, "hinge", 2, 1, torch.Generator().manual_seed(1),
                           CPU)
         space = _space(sc, 2)
         rng = random.Random(r)
@@ -107,13 +109,13 @@ def test_mcmc_recovers_a_planted_program():
     planted_data = []
     for b in data:
         obs = Observation(b.agent, b.rel)
-        from neurosym_cli.envs.features import PairFeatures
+        from fixtures import feature_map
 
-        feats = PairFeatures("formation", b.agent, b.rel, "v1")
+        feats = feature_map("formation").view(b.agent, b.rel)
         with torch.no_grad():
             out = pol(obs, lambda logits, r: picks_to_mask(rule_picks(planted[0], feats, None)[..., None], b.n_agents))
-        planted_data.append(DataBucket(b.agent, b.rel, env.effective_action(out.action)))
-    sc = CachedScorer(pol, env, "formation", planted_data, 0, "v1", 0.0, "paper", 1, 1,
+        planted_data.append(DataBucket(b.agent, b.rel, env.target(out.action)))
+    sc = CachedScorer(pol, env, planted_data, 0, "v1", 0.0, "paper", 1, 1,
                       torch.Generator().manual_seed(0), CPU)
     assert sc.score(planted).l1 < 1e-5
     space = _space(sc, 1, det=True)
@@ -153,12 +155,12 @@ def test_tree_json_round_trip_and_torch_prediction_match_sklearn():
     import pytest
 
     pytest.importorskip("sklearn")
-    from neurosym_cli.envs.features import PairFeatures
+    from fixtures import feature_map
     from neurosym_cli.synth.tree import TreeModel, fit_tree
 
     env, pol, data = _setup(rollouts=2)
     b = data[-1]
-    feats = PairFeatures("formation", b.agent, b.rel, "v1")
+    feats = feature_map("formation").view(b.agent, b.rel)
     x = torch.stack([feats[f].expand(b.states, b.n_agents, b.n_agents) for f in feats.names], -1)
     y = (feats["d"] < 3.0) & (feats["dx"] > 0)  # a rule a tree can learn exactly
     tree, info = fit_tree(x.reshape(-1, x.shape[-1]), y.flatten(), feats.names, (3, 5), 0)
@@ -170,10 +172,10 @@ def test_tree_json_round_trip_and_torch_prediction_match_sklearn():
 
 
 def test_single_leaf_tree_predicts_its_class():
-    from neurosym_cli.envs.features import PairFeatures
+    from fixtures import feature_map
     from neurosym_cli.synth.tree import TreeModel
 
-    feats = PairFeatures("formation", torch.zeros(2, 3, 2), torch.randn(2, 3, 3, 2), "v1")
+    feats = feature_map("formation").view(torch.zeros(2, 3, 2), torch.randn(2, 3, 3, 2))
     for label in (True, False):
         tree = TreeModel(["d"], [-1], [-1], [-2], [-2.0], [label])
         assert (tree.predict(feats) == label).all()
@@ -204,9 +206,9 @@ def test_compiled_rule_scans_equal_the_torch_evaluator():
     if not kernels.AVAILABLE:
         pytest.skip("numba not installed")
     env, pol, data = _setup()
-    fast = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
+    fast = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
                         CPU, backend="numba")
-    ref = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
+    ref = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
                        CPU, backend="torch")
     space = _space(ref, 2)
     covered = 0
@@ -234,7 +236,7 @@ def test_compiled_and_torch_scorers_run_the_same_search(case):
         kind, rnd, objective = "unlabeled", 0, "hinge"
     runs = []
     for backend in ("numba", "torch"):
-        sc = CachedScorer(pol, env, kind, data, rnd, "v1", 0.5, objective, 3, 1,
+        sc = CachedScorer(pol, env, data, rnd, "v1", 0.5, objective, 3, 1,
                           torch.Generator().manual_seed(1), CPU, backend=backend)
         space = _space(sc, 3)
         rng = random.Random(5)
@@ -258,7 +260,7 @@ def test_scorer_beyond_127_agents(backend):
 
     if backend == "numba" and not kernels.AVAILABLE:
         pytest.skip("numba not installed")
-    env = make_env(CrossConfig(name="random-cross", horizon=4))
+    env = make_task(CrossConfig(name="random-cross", horizon=4))
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig()).eval()
     g = torch.Generator().manual_seed(0)
@@ -266,7 +268,7 @@ def test_scorer_beyond_127_agents(backend):
     pos = torch.rand(s, n, 2, generator=g) * 30
     agent = torch.randn(s, n, 2, generator=g)
     data = [DataBucket(agent, pos[:, :, None, :] - pos[:, None, :, :], torch.randn(s, n, 2, generator=g))]
-    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 3, 1, torch.Generator().manual_seed(1),
+    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 3, 1, torch.Generator().manual_seed(1),
                       CPU, backend=backend)
     far = ArgMaxRule(Linear((("d", 1.0),)), TrueCond())  # the farthest agent: often an index above 127
     picks = sc.picks_of(far)[0].long()
@@ -282,14 +284,17 @@ def test_every_rule_the_search_proposes_compiles_for_the_kernels(kind, goals, ve
     """The kernels' rule specification is derived from the AST (kernels.rule_spec); every rule the search can
     propose (initial rules and neighbours of every move, with and without own-state scores) compiles to it, so
     the compiled back-end never silently falls back to torch in a search."""
-    from neurosym_cli.dsl.vocabulary import agent_level, feature_names
+    from fixtures import feature_map
     from neurosym_cli.synth import kernels
 
-    names = feature_names(kind, goals, version)
+    vocab = feature_map(kind, version, goals).vocab
+    names = vocab.names
+    agent_level = vocab.agent_level
     pair, agent = [n for n in names if not agent_level(n)], [n for n in names if agent_level(n)]
     rng = random.Random(0)
     for own_scores in (True, False):
-        space = SearchSpace({n: (-1.0, 0.0, 1.0) for n in names}, rules=3, own_scores=own_scores)
+        space = SearchSpace({n: (-1.0, 0.0, 1.0) for n in names}, rules=3, own_scores=own_scores,
+                            own=frozenset(agent))
         rules = random_rules(space, rng)
         for _ in range(400):
             rules, _move = propose(rules, space, rng)
@@ -301,24 +306,30 @@ def test_every_rule_the_search_proposes_compiles_for_the_kernels(kind, goals, ve
 
 def _planted_scorer(lam=0.0):
     """The planted-program fixture: targets made by the transformer hearing only the nearest agent."""
-    from neurosym_cli.envs.features import PairFeatures
+    from fixtures import feature_map
 
     env, pol, data = _setup(rollouts=4)
     planted = ArgMaxRule(Linear((("d", -1.0),)), TrueCond())
     planted_data = []
     for b in data:
-        feats = PairFeatures("formation", b.agent, b.rel, "v1")
+        feats = feature_map("formation").view(b.agent, b.rel)
         with torch.no_grad():
             out = pol(Observation(b.agent, b.rel),
                       lambda logits, r: picks_to_mask(rule_picks(planted, feats, None)[..., None], b.n_agents))
-        planted_data.append(DataBucket(b.agent, b.rel, env.effective_action(out.action)))
-    return planted, CachedScorer(pol, env, "formation", planted_data, 0, "v1", lam, "paper", 3, 1,
+        planted_data.append(DataBucket(b.agent, b.rel, env.target(out.action)))
+    return planted, CachedScorer(pol, env, planted_data, 0, "v1", lam, "paper", 3, 1,
                                  torch.Generator().manual_seed(0), CPU)
 
 
 def test_never_holds_finds_contradictions():
     from neurosym_cli.dsl.parser import parse
-    from neurosym_cli.synth.simplify import never_holds
+    from fixtures import feature_map
+    from neurosym_cli.synth.simplify import never_holds as _never
+
+    vocab = feature_map("formation").vocab
+
+    def never_holds(c):
+        return _never(c, vocab)
 
     def c(text):
         return parse(f"random(filter({text}, l))").rounds[0][0].cond
@@ -377,7 +388,8 @@ def test_simplification_of_a_filter_that_always_holds_and_a_repeated_rule():
 
     planted, sc = _planted_scorer(lam=0.5)
     rules = (planted,) + parse("argmax(map(-1.0*d, filter(theta <= 2.22 or d >= -0.6, l)))\n").rounds[0]
-    assert always_holds(rules[1].cond) and not always_holds(parse("random(filter(d >= 0.5, l))").rounds[0][0].cond)
+    v = sc.fmap.vocab
+    assert always_holds(rules[1].cond, v) and not always_holds(parse("random(filter(d >= 0.5, l))").rounds[0][0].cond, v)
     before = sc.score(rules).total
     simple, done = simplify(sc, rules)
     assert simple == (planted,) and sc.score(simple).total == pytest.approx(before, abs=1e-9)

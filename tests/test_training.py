@@ -5,8 +5,10 @@ import copy
 import pytest
 import torch
 
-from neurosym_cli.config import ModelConfig, OptimConfig, CrossConfig, GridConfig
-from neurosym_cli.envs import make_env
+from neurosym_cli.config import ModelConfig, OptimConfig
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks.random_grid import GridConfig
+from neurosym_cli.tasks import make_task
 from neurosym_cli.evaluation import evaluate, summarize
 from neurosym_cli.policy import CommTransformer, make_comm
 from neurosym_cli.training import FitSpec, FitState, fit
@@ -26,7 +28,7 @@ def _policy(env):
 
 @pytest.mark.slow
 def test_loss_falls_on_a_small_case():
-    env = make_env(SMALL)
+    env = make_task(SMALL)
     pol = _policy(env)
     comm = make_comm("full", 2)
     before = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
@@ -42,7 +44,7 @@ def test_loss_falls_on_a_small_case():
 
 
 def test_resume_reproduces_an_uninterrupted_run():
-    env = make_env(SMALL)
+    env = make_task(SMALL)
     spec = FitSpec(rollouts=4 * 4, batch=4, horizon=10, checkpoint_every=2)
     comm = make_comm("full", 2)
     straight = _policy(env)
@@ -69,7 +71,7 @@ def test_resume_reproduces_an_uninterrupted_run():
 
 
 def test_step_per_bucket_takes_one_adam_step_per_bucket():
-    env = make_env(CrossConfig(name="c", horizon=5))
+    env = make_task(CrossConfig(name="c", horizon=5))
     pol = _policy(env)
     gen = torch.Generator().manual_seed(0)
     spec = FitSpec(rollouts=24, batch=24, horizon=5, optim=OptimConfig(step_per_bucket=True))
@@ -86,12 +88,12 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
     from neurosym_cli.dsl import parse
     from neurosym_cli.policy.comm import ProgramComm
 
-    env = make_env(SMALL)
+    env = make_task(SMALL)
     pol = _policy(env)
     full = make_comm("full", 2)
     fit(pol, env, full, FitSpec(rollouts=16 * 20, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3)),
         torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
-    prog = ProgramComm(parse("random(filter(d >= 3.0, l))\n"), "formation")
+    prog = ProgramComm(parse("random(filter(d >= 3.0, l))\n"), env.features("v1"))
     before = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
     fit(pol, env, prog, FitSpec(rollouts=16 * 15, batch=16, horizon=30, optim=OptimConfig(lr=3e-3, lr_final=1e-3)),
         torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
@@ -102,9 +104,9 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
 def test_min_steps_per_batch_splits_single_n_batches():
     """random-grid batches hold one agent count: min_steps_per_batch=4 gives 4 Adam steps per batch, each on a
     quarter of the episodes, and the split keeps every episode."""
-    from neurosym_cli.envs.base import split_buckets
+    from neurosym_cli.tasks.base import split_buckets
 
-    env = make_env(GridConfig(name="random-grid", ell=14.0, horizon=5))
+    env = make_task(GridConfig(name="random-grid", ell=14.0, horizon=5))
     buckets = env.reset(10, torch.Generator().manual_seed(0))
     parts = split_buckets(buckets, 4)
     assert len(buckets) == 1 and len(parts) == 4 and sum(b.batch for b in parts) == 10

@@ -8,7 +8,7 @@ from typing import Any, Callable
 
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from ..config import RunConfig, UserError
@@ -67,6 +67,20 @@ def _row(result: Any) -> dict[str, Any]:
     return keep
 
 
+def typed_config(cfg: DictConfig) -> RunConfig:
+    """The typed config of a composed one: the task node merged into its class's schema first (tasks/registry.py),
+    so its defaults fill the interpolations that read it (``rules: ${task.rules}``); errors are one line."""
+    from ..tasks.registry import typed_task
+
+    cfg = cfg.copy()
+    with open_dict(cfg):
+        cfg.task = typed_task(cfg.task)
+    try:
+        return OmegaConf.to_object(cfg)  # type: ignore[return-value]
+    except OmegaConfBaseException as e:
+        raise UserError(str(e).splitlines()[0]) from None
+
+
 def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
     """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback.
 
@@ -83,17 +97,12 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     record = Path(hc.runtime.output_dir) / "job_result.json"
     overrides = list(hc.overrides.task)
     try:
-        try:
-            typed: RunConfig = OmegaConf.to_object(cfg)  # type: ignore[assignment]
-        except OmegaConfBaseException as e:
-            raise UserError(str(e).splitlines()[0]) from None
-        info = RunInfo(OmegaConf.to_container(cfg, resolve=True), sweep,  # type: ignore[arg-type]
-                       hc.runtime.output_dir)
+        typed = typed_config(cfg)
+        info = RunInfo(sweep, hc.runtime.output_dir)
         if typed.selected and name not in ("select", "pipeline"):  # the pipeline selects first when it must
             from ..stages.select import apply_selected
 
             typed = apply_selected(typed)
-            info.config.update(rules=typed.rules, lam=typed.lam, features=typed.features, selected=True)
         if typed.threads:
             import torch  # only here: show-program must not pay for importing torch
 

@@ -13,7 +13,8 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from ..baselines import BASELINES
-from ..config import TASK_SCHEMAS, RunConfig
+from ..config import RunConfig
+from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
 
 def fail_suffix(p: float) -> str:
@@ -26,8 +27,8 @@ if not OmegaConf.has_resolver("fail_suffix"):
 
 _store = ConfigStore.instance()
 _store.store(name="run_schema", node=RunConfig)
-for _family, _schema in TASK_SCHEMAS.items():  # what a conf/task/*.yaml extends
-    _store.store(name=f"{_family}_task_schema", node=_schema)  # no group: not a choice of its own in --help
+for _name, _target in entry_point_tasks().items():  # installed packages' tasks: task=<name> (tasks/registry.py)
+    _store.store(group="task", name=_name, node={"_target_": _target, "name": _name})
 for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
     _store.store(group="baseline", name=_b.name, node=_b)
 
@@ -53,5 +54,7 @@ def compose_config(cmd: str, overrides: list[str] | None = None) -> RunConfig:
     from hydra import compose, initialize_config_module
     from omegaconf import OmegaConf
 
+    from ._run import typed_config
+
     with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
-        return OmegaConf.to_object(compose(cmd, overrides=overrides or []))  # type: ignore[return-value]
+        return typed_config(compose(cmd, overrides=overrides or []))

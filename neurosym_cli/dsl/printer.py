@@ -4,7 +4,7 @@
     random(filter(d >= 3.41 and gd >= 2.0, l))
 
 A program with several rounds writes a ``round k:`` header before each round's rules. ``parser.parse`` is the
-exact inverse: parse(to_text(p)) == p. ``describe`` gives a plain-language reading for people.
+exact inverse: parse(to_text(p)) == p. ``describe`` gives a plain-language reading for people, in the words of the task's features (vocabulary.py).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from .ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond, cond_features
-from .vocabulary import agent_level, words
+from .vocabulary import FeatureSet
 
 
 def fmt_float(x: float) -> str:
@@ -74,19 +74,19 @@ def to_text(p: Program) -> str:
 
 
 # ----------------------------------------------------------------------------------- plain language
-# A filter's clauses are of two kinds (vocabulary.agent_level): those on the asking agent's own state are the
+# A filter's clauses are of two kinds (FeatureSet.agent_level): those on the asking agent's own state are the
 # same for every candidate, so they decide whether the agent asks anybody at all (a guard: "while my distance to
 # my goal is at least 7.46, ..."); those on the other agent select among the candidates ("... within 2.06").
 # A score that reads only the agent's own state ties every candidate, and argmax then takes the lowest index.
 
 
-def _own(c: Cond) -> bool | None:
+def _own(c: Cond, v: FeatureSet) -> bool | None:
     """True if every feature of c describes the asking agent, False if every one the other agent, None if mixed
     (TrueCond counts as the asking agent's)."""
     names = cond_features(c)
-    if all(agent_level(n) for n in names):
+    if all(v.agent_level(n) for n in names):
         return True
-    if not any(agent_level(n) for n in names):
+    if not any(v.agent_level(n) for n in names):
         return False
     return None
 
@@ -96,11 +96,11 @@ def _num(x: float) -> str:
     return fmt_float(x)
 
 
-def _test_words(t: Test) -> str:
+def _test_words(t: Test, v: FeatureSet) -> str:
     """'my distance to my goal is at least 7.46', 'its distance is at most 2.06' (a test alone)."""
     if len(t.lhs.terms) == 1:
         name, w = t.lhs.terms[0]
-        subject = words(name) if agent_level(name) or "_" in name else f"its {words(name)}"  # "_": "... x its ..."
+        subject = v.words(name)
         if w == 1.0:
             return f"{subject} is at least {_num(t.threshold)}"
         if w == -1.0:
@@ -109,33 +109,33 @@ def _test_words(t: Test) -> str:
     return f"{linear_text(t.lhs)} is at least {_num(t.threshold)}"
 
 
-def _cond_words(c: Cond) -> str:
+def _cond_words(c: Cond, v: FeatureSet) -> str:
     """Any condition, each clause with its subject ('my ...', 'its ...'); and binds tighter than or."""
     if isinstance(c, TrueCond):
         return "always"
     if isinstance(c, Test):
-        return _test_words(c)
+        return _test_words(c, v)
     op = " and " if isinstance(c, And) else " or "
-    return "(" + _cond_words(c.left) + op + _cond_words(c.right) + ")"
+    return "(" + _cond_words(c.left, v) + op + _cond_words(c.right, v) + ")"
 
 
-def _bare(c: Cond) -> str:
+def _bare(c: Cond, v: FeatureSet) -> str:
     """_cond_words without the outer parentheses."""
-    text = _cond_words(c)
+    text = _cond_words(c, v)
     return text[1:-1] if isinstance(c, (And, Or)) else text
 
 
-def _selection(c: Cond) -> str:
+def _selection(c: Cond, v: FeatureSet) -> str:
     """A clause on the other agent, as a phrase after 'agent': 'within 2.06', 'whose bearing (rad) is ...'."""
     if isinstance(c, Test) and len(c.lhs.terms) == 1:
         name, w = c.lhs.terms[0]
-        if name == "d" and w == -1.0:
+        if v.get(name).distance and w == -1.0:
             return f"within {_num(-c.threshold)}"
-        if name == "d" and w == 1.0:
+        if v.get(name).distance and w == 1.0:
             return f"at least {_num(c.threshold)} away"
-        text = _test_words(c)
+        text = _test_words(c, v)
         return "whose " + text[len("its "):] if text.startswith("its ") else f"for which {text}"
-    return f"for which {_bare(c)}"
+    return f"for which {_bare(c, v)}"
 
 
 def _conjuncts(c: Cond) -> list[Cond]:
@@ -144,45 +144,46 @@ def _conjuncts(c: Cond) -> list[Cond]:
     return [] if isinstance(c, TrueCond) else [c]
 
 
-def _pick(r: Rule) -> tuple[str, str]:
+def _pick(r: Rule, v: FeatureSet) -> tuple[str, str]:
     """(who is asked, a note on a score that ties every candidate)."""
     if isinstance(r, RandomRule):
         return "a random agent", ""
     terms = r.score.terms
-    if all(agent_level(n) for n, _ in terms):
-        what = words(terms[0][0]) if len(terms) == 1 else linear_text(r.score)
+    if all(v.agent_level(n) for n, _ in terms):
+        what = v.words(terms[0][0]) if len(terms) == 1 else linear_text(r.score)
         return "the lowest-index agent", (f" (the score, {what}, is the same for every candidate, so argmax falls to "
                                           f"agent order)")
     if len(terms) == 1:
         name, w = terms[0]
-        if name == "d":
+        if v.get(name).distance:
             return f"the {'nearest' if w < 0 else 'farthest'} agent", ""
-        subject = words(name)
+        subject = v.words(name).removeprefix("its ")
         return f"the agent with the {'smallest' if w < 0 else 'largest'} {subject}", ""
     return f"the agent maximising {linear_text(r.score)}", ""
 
 
-def describe(r: Rule) -> str:
+def describe(r: Rule, vocab: FeatureSet) -> str:
     """One plain-language line that separates the rule's guard (clauses on the asking agent's own state) from its
     selection (clauses and score on the other agent), e.g. 'while my distance to my goal is at least 7.46, ask a
     random agent within 2.06; otherwise ask nobody'."""
-    pick, note = _pick(r)
+    v = vocab
+    pick, note = _pick(r, v)
     guards, selections, options = [], [], []
     for c in _conjuncts(r.cond):
-        own = _own(c)
+        own = _own(c, v)
         if own:
-            guards.append(_bare(c))
+            guards.append(_bare(c, v))
         elif own is False:
-            selections.append(_selection(c))
-        elif isinstance(c, Or) and _own(c.left) is not None and _own(c.right) is not None:
-            mine, other = (c.left, c.right) if _own(c.left) else (c.right, c.left)
-            if _own(mine) and _own(other) is False:
-                options.append(f"any agent if {_bare(mine)}, otherwise only those "
-                               f"{_selection(other)}")
+            selections.append(_selection(c, v))
+        elif isinstance(c, Or) and _own(c.left, v) is not None and _own(c.right, v) is not None:
+            mine, other = (c.left, c.right) if _own(c.left, v) else (c.right, c.left)
+            if _own(mine, v) and _own(other, v) is False:
+                options.append(f"any agent if {_bare(mine, v)}, otherwise only those "
+                               f"{_selection(other, v)}")
             else:
-                selections.append(_selection(c))
+                selections.append(_selection(c, v))
         else:
-            selections.append(_selection(c))
+            selections.append(_selection(c, v))
     body = f"ask {pick}" + (" " + " and ".join(selections) if selections else "")
     body += "".join(f" ({o})" for o in options) + note
     if guards:

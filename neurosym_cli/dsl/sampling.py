@@ -11,7 +11,6 @@ import random
 from dataclasses import dataclass, replace
 
 from .ast import And, ArgMaxRule, Cond, Linear, Or, RandomRule, Rule, Test, TrueCond
-from .vocabulary import agent_level
 
 MOVES = ("threshold", "feature", "sign", "shape", "kind", "rule")
 _MOVE_WEIGHTS = (0.35, 0.15, 0.1, 0.15, 0.1, 0.15)
@@ -35,6 +34,7 @@ class SearchSpace:
     max_depth: int = 2
     det: bool = False  # argmax rules only (det-prog)
     own_scores: bool = True  # argmax scores may read the asking agent's own state (they tie every candidate)
+    own: frozenset[str] = frozenset()  # the features of the asking agent's own state (FeatureSet.agent_level)
 
     @property
     def features(self) -> list[str]:
@@ -43,7 +43,7 @@ class SearchSpace:
     @property
     def score_features(self) -> list[str]:
         """Features an argmax score may read: all, or (own_scores=False) those that vary with the candidate."""
-        return [f for f in self.features if self.own_scores or not agent_level(f)]
+        return [f for f in self.features if self.own_scores or f not in self.own]
 
     def spread(self, name: str) -> float:
         q = self.quantiles[name]

@@ -17,16 +17,16 @@ from torch import Tensor
 from ..config import ConfigError
 from ..dsl.ast import Program
 from ..dsl.interpret import picks_to_mask, program_picks
-from ..envs.base import EnvState, MultiAgentEnv, Observation, Rng, eye_mask
-from ..envs.features import PairFeatures
+from ..tasks.base import Observation, Rng, Task, TaskState, eye_mask, require
+from ..tasks.features import FeatureMap
 
 
 @dataclass
 class CommContext:
     """What a provider may look at during one step of a bucket."""
 
-    env: MultiAgentEnv
-    state: EnvState
+    env: Task
+    state: TaskState
     obs: Observation
     rng: Rng
 
@@ -111,7 +111,7 @@ class NearestComm:
         return picks_to_mask(self.picks(ctx, round), ctx.state.n_agents)
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
-        d = ctx.env.true_distance(ctx.state)  # (B, N, N), +inf on the diagonal
+        d = require(ctx.env, "distances", "dist")(ctx.state)  # (B, N, N), +inf on the diagonal
         return d.topk(max(min(self.k, d.shape[-1] - 1), 0), dim=-1, largest=False).indices
 
 
@@ -121,14 +121,14 @@ class ProgramComm:
 
     name = "program"
 
-    def __init__(self, program: Program, kind: str, features: str = "v1"):
-        self.program, self.kind, self.features = program, kind, features
+    def __init__(self, program: Program, fmap: FeatureMap):
+        self.program, self.fmap = program, fmap  # fmap: the task's feature map the program reads
 
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
         return picks_to_mask(self.picks(ctx, round), ctx.obs.agent.shape[1])
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
-        feats = PairFeatures(self.kind, ctx.obs.agent, ctx.obs.rel, self.features)
+        feats = self.fmap.view(ctx.obs.agent, ctx.obs.rel)
         return program_picks(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
 
 
@@ -138,11 +138,11 @@ class TreeComm(_Dense):
 
     name = "tree"
 
-    def __init__(self, trees: list, kind: str, features: str = "v1"):
-        self.trees, self.kind, self.features = trees, kind, features
+    def __init__(self, trees: list, fmap: FeatureMap):
+        self.trees, self.fmap = trees, fmap
 
     def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
-        feats = PairFeatures(self.kind, ctx.obs.agent, ctx.obs.rel, self.features)
+        feats = self.fmap.view(ctx.obs.agent, ctx.obs.rel)
         return self.trees[min(round, len(self.trees) - 1)].predict(feats) & _others(logits)
 
 

@@ -24,7 +24,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from ..envs.base import eye_mask
+from ..tasks.base import eye_mask
 
 
 class GatedComm(nn.Module):
@@ -34,12 +34,12 @@ class GatedComm(nn.Module):
 
     name = "gated"
 
-    def __init__(self, rounds: int, hidden: int = 16):
+    def __init__(self, rounds: int, hidden: int = 16, pair_dim: int = 2):
         super().__init__()
         self.rounds, self.hidden = rounds, hidden
         self.scale = nn.Parameter(torch.ones(rounds))  # a_r
         self.bias = nn.Parameter(torch.zeros(rounds))  # b_r
-        self.edge = nn.ModuleList(nn.Sequential(nn.Linear(2, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+        self.edge = nn.ModuleList(nn.Sequential(nn.Linear(pair_dim, hidden), nn.ReLU(), nn.Linear(hidden, 1))
                                   for _ in range(rounds))  # g_r(o_ij)
         for g in self.edge:
             nn.init.zeros_(g[-1].weight)
@@ -48,7 +48,7 @@ class GatedComm(nn.Module):
         self._degree: list[Tensor] = []
 
     def gate_logits(self, logits: Tensor, rel: Tensor, round: int) -> Tensor:
-        """logits (B, N, N) attention logits, rel (B, N, N, 2) observations o_ij -> (B, N, N) gate logits u_ij."""
+        """logits (B, N, N) attention logits, rel (B, N, N, Dp) observations o_ij -> (B, N, N) gate logits u_ij."""
         r = min(round, self.rounds - 1)
         return self.scale[r] * logits + self.bias[r] + self.edge[r](rel).squeeze(-1)
 

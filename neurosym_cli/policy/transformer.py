@@ -28,7 +28,7 @@ from torch import Tensor, nn
 
 from ..config import ModelConfig
 from ..dsl.interpret import dedup_valid, picks_to_mask
-from ..envs.base import Observation
+from ..tasks.base import Observation
 from ..utils.ops import softmax_last
 
 Selector = Callable[[Tensor, int], Tensor]
@@ -60,14 +60,14 @@ class PolicyOutput:
 class CommRound(nn.Module):
     """One round of communication: attention logits, masked aggregation, post-attention block."""
 
-    def __init__(self, width: int, ffn: int, dropout: float):
+    def __init__(self, width: int, ffn: int, dropout: float, pair_dim: int = 2):
         super().__init__()
         d = width
         self.scale = 1.0 / math.sqrt(d)
         self.query = nn.Linear(d, d)
-        self.key_edge = nn.Linear(2, d)
+        self.key_edge = nn.Linear(pair_dim, d)  # Dp: the task's pair observation width
         self.value = nn.Linear(d, d)
-        self.msg_edge = nn.Linear(2, d)
+        self.msg_edge = nn.Linear(pair_dim, d)
         self.out = nn.Linear(d, d)
         self.ffn1 = nn.Linear(d, ffn)
         self.ffn2 = nn.Linear(ffn, d)
@@ -76,14 +76,14 @@ class CommRound(nn.Module):
         self.drop = nn.Dropout(dropout)
 
     def logits(self, h: Tensor, rel: Tensor) -> Tensor:
-        """h: (B, N, D) state embedding, rel: (B, N, N, 2) -> (B, N, N) attention logits l_ij."""
+        """h: (B, N, D) state embedding, rel: (B, N, N, Dp) -> (B, N, N) attention logits l_ij."""
         q = self.query(h) * self.scale  # (B, N, D)
         k = torch.relu(self.key_edge(rel))  # (B, N, N, D): k_ij from o_ij
         # multiply-and-sum beats a batched mat-vec here (many (N, D) x (D,) products are 2x slower on CPU)
         return (k * q.unsqueeze(2)).sum(-1)
 
     def message(self, v_j: Tensor, o_ji: Tensor) -> Tensor:
-        """pi^M(s_j, o_ji) = W_v x_j + ReLU(W_m o_ji): v_j (..., D) the sender's value, o_ji (..., 2) its view of
+        """pi^M(s_j, o_ji) = W_v x_j + ReLU(W_m o_ji): v_j (..., D) the sender's value, o_ji (..., Dp) its view of
         the receiver -> (..., D)."""
         return v_j + torch.relu(self.msg_edge(o_ji))
 
@@ -110,17 +110,18 @@ class CommRound(nn.Module):
         the same function as ``aggregate(x, logits(h, rel), mask)`` computed on the picked pairs only.
         Returns the round output (B, N, D), the weights (B, N, N) and the mask (B, N, N) bool."""
         b, n, k = picks.shape
+        p = rel.shape[-1]  # Dp
         valid = dedup_valid(picks) if k else torch.zeros_like(picks, dtype=torch.bool)  # (B, N, K)
         mask = picks_to_mask(torch.where(valid, picks, -1), n)
         if k == 0:  # nobody is heard: the aggregate is zero and no logit or message is needed
             return self._post(x, torch.zeros_like(x)), torch.zeros(b, n, n, device=x.device), mask
         idx = picks.clamp(min=0)
         q = self.query(h) * self.scale  # (B, N, D)
-        o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, 2))  # (B, N, K, 2): receiver i's view of j
+        o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, p))  # (B, N, K, Dp): receiver i's view of j
         logits = (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(2)).sum(-1)  # (B, N, K)
         # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
         send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
-        o_ji = rel.reshape(b, n * n, 2).gather(1, send.expand(-1, -1, 2)).view(b, n, k, 2)
+        o_ji = rel.reshape(b, n * n, p).gather(1, send.expand(-1, -1, p)).view(b, n, k, p)
         v = self.value(x)  # (B, N, D)
         v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
         agg, attn_k = self.attend(logits, valid, self.message(v_j, o_ji))  # (B, N, D), (B, N, K)
@@ -138,13 +139,19 @@ class CommRound(nn.Module):
 
 
 class CommTransformer(nn.Module):
-    """Shared by every agent; all computation is batched over (B, N)."""
+    """Shared by every agent; all computation is batched over (B, N). Its widths come from the task: agent input
+    Ds = ``obs_dim``, pair input Dp = ``pair_dim``, action A = ``action_dim``."""
 
-    def __init__(self, obs_dim: int, action_dim: int, rounds: int, cfg: ModelConfig):
+    @classmethod
+    def for_task(cls, task, cfg: ModelConfig) -> "CommTransformer":
+        """The transformer sized by a task's declared widths and rounds."""
+        return cls(task.obs_dim, task.action_dim, task.rounds, cfg, task.pair_dim)
+
+    def __init__(self, obs_dim: int, action_dim: int, rounds: int, cfg: ModelConfig, pair_dim: int = 2):
         super().__init__()
-        self.obs_dim, self.action_dim, self.n_rounds = obs_dim, action_dim, rounds
+        self.obs_dim, self.action_dim, self.n_rounds, self.pair_dim = obs_dim, action_dim, rounds, pair_dim
         self.embed = nn.Linear(obs_dim, cfg.width)
-        self.rounds = nn.ModuleList(CommRound(cfg.width, cfg.ffn, cfg.dropout) for _ in range(rounds))
+        self.rounds = nn.ModuleList(CommRound(cfg.width, cfg.ffn, cfg.dropout, pair_dim) for _ in range(rounds))
         self.head = nn.Linear(cfg.width, action_dim)
 
     def forward(self, obs: Observation, select: Selector, picks: PickSource | None = None) -> PolicyOutput:

@@ -11,16 +11,14 @@ of these and print; ``neurosym pipeline`` calls them in the order of the stage g
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 
 @dataclass
 class RunInfo:
-    """What a stage needs to know about the command that runs it, besides its typed config."""
+    """What a stage needs to know about the command that runs it, besides its typed config (which is the only
+    config: what is saved beside an artifact is ``RunConfig.record()`` of the config that made it)."""
 
-    config: dict[str, Any] = field(default_factory=dict)
-    """the composed config, resolved: saved beside every artifact"""
     multirun: bool = False
     """part of a sweep or of the pipeline: plain log lines, no intermediate tables"""
     log_dir: str = ""

@@ -6,36 +6,44 @@ from __future__ import annotations
 from .. import artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
-from ..envs.features import feature_names
 from ..policy.comm import CommProvider, ProgramComm, TreeComm, comm_module, make_comm, with_link_failure
 from ..dsl.files import load_program
+from ..tasks.features import FeatureMap
 from ..utils.io import ArtifactError, read_json
 
 
-def check_program(program: Program, cfg: RunConfig, source: str) -> None:
+def feature_map(cfg: RunConfig, task=None) -> FeatureMap:
+    """The feature map ``cfg.features`` of the task (built from the config when not given)."""
+    from ..tasks import make_task
+
+    return (task or make_task(cfg.task, cfg.horizon)).features(cfg.features)
+
+
+def check_program(program: Program, cfg: RunConfig, source: str, fmap: FeatureMap | None = None) -> None:
     """A program runs on this task only with its number of rounds and features of this task's feature map."""
     if program.n_rounds != cfg.task.rounds:
         raise ConfigError(f"{source}: the program has {program.n_rounds} round(s), task {cfg.task.name} "
                           f"{cfg.task.rounds}")
-    known = feature_names(cfg.task.kind, cfg.task.agents_per_group, cfg.features)
-    unknown = sorted(program.features() - set(known))
+    known = (fmap or feature_map(cfg)).vocab
+    unknown = known.unknown(program.features())
     if unknown:
         raise ConfigError(f"{source}: feature(s) {', '.join(unknown)} not in task {cfg.task.name} with "
-                          f"features={cfg.features}; it has: {', '.join(known)}")
+                          f"features={cfg.features}; it has: {', '.join(known.names)}")
 
 
-def baseline_comm(cfg: RunConfig) -> CommProvider:
+def baseline_comm(cfg: RunConfig, task=None) -> CommProvider:
     """The provider of ``cfg.baseline`` (a program or tree from the run directory or ``program=``, or a rule), with
-    the task's link failure."""
-    return with_link_failure(_provider(cfg), cfg.task.link_failure)
+    the task's link failure. ``task``: the task it runs on (built from the config when not given)."""
+    return with_link_failure(_provider(cfg, task), cfg.task.link_failure)
 
 
-def _provider(cfg: RunConfig) -> CommProvider:
+def _provider(cfg: RunConfig, task=None) -> CommProvider:
     if cfg.baseline.comm == "program":
         path = paths.program_file(cfg)
         program = load_program(path, None if cfg.program else paths.synth_command(cfg))
-        check_program(program, cfg, str(path))
-        return ProgramComm(program, cfg.task.kind, cfg.features)
+        fmap = feature_map(cfg, task)
+        check_program(program, cfg, str(path), fmap)
+        return ProgramComm(program, fmap)
     if cfg.baseline.comm == "tree":
         from ..synth.tree import TreeModel
 
@@ -49,11 +57,13 @@ def _provider(cfg: RunConfig) -> CommProvider:
                                 f"overwrite=true` fits it again") from None
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
-        return TreeComm(rounds, cfg.task.kind, cfg.features)
+        return TreeComm(rounds, feature_map(cfg, task))
     if cfg.baseline.comm == "gated":
         from ..policy.gated import GatedComm
 
-        return GatedComm(cfg.task.rounds)
+        from ..tasks import make_task
+
+        return GatedComm(cfg.task.rounds, pair_dim=(task or make_task(cfg.task, cfg.horizon)).pair_dim)
     return make_comm(cfg.baseline.comm, cfg.rules)
 
 
@@ -82,10 +92,11 @@ def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
     return hashlib.sha1(data).hexdigest()
 
 
-def load_baseline(cfg: RunConfig, device):
-    """(policy on ``device``, env, provider) of ``cfg.baseline``: its trained weights and its communication.
-    A partly trained model is used with a warning naming the command that finishes it."""
-    from ..envs import make_env
+def load_baseline(cfg: RunConfig, device, task=None):
+    """(policy on ``device``, task, provider) of ``cfg.baseline``: its trained weights and its communication, on
+    ``task`` (built from the config when not given). A partly trained model is used with a warning naming the
+    command that finishes it."""
+    from ..tasks import make_task
     from ..utils.console import log
 
     payload = artifacts.load_checkpoint(paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
@@ -93,11 +104,12 @@ def load_baseline(cfg: RunConfig, device):
         log.warning("the model is only partly trained (step %d); using it anyway; `%s` finishes it",
                     payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
-    comm = baseline_comm(cfg)
+    task = task or make_task(cfg.task, cfg.horizon)
+    comm = baseline_comm(cfg, task)
     load_gate(comm, payload, paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
     if (gate := comm_module(comm)) is not None:
         gate.to(device)
     if payload.get("made_under") and payload["made_under"] != comm_identity(cfg, comm):
         log.warning("the retrained model was made under another program (or tree) than the one there now; "
                     "`%s overwrite=true` retrains it under this one", paths.retrain_command(cfg))
-    return policy, make_env(cfg.task, cfg.horizon), comm
+    return policy, task, comm

@@ -41,5 +41,5 @@ def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], sum
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
-        "config": info.config,
+        "config": cfg.record(),
     })

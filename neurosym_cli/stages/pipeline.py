@@ -27,8 +27,7 @@ RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": eval
 def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage) -> tuple[RunConfig, RunInfo]:
     """The pipeline's config with the stage's command and baseline (what `neurosym <verb> baseline=B` composes)."""
     b = get(stage.baseline)
-    return (dataclasses.replace(cfg, cmd=stage.verb, baseline=b),
-            RunInfo({**info.config, "cmd": stage.verb, "baseline": dataclasses.asdict(b)}, info.multirun, info.log_dir))
+    return dataclasses.replace(cfg, cmd=stage.verb, baseline=b), RunInfo(info.multirun, info.log_dir)
 
 
 def _trained_seconds(history: Path) -> float:
@@ -49,8 +48,6 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             train(*stage_config(cfg, info, Stage("train", ORACLE)))
             run_selection(cfg, info)
         cfg = apply_selected(cfg)
-        info = RunInfo({**info.config, "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features}, info.multirun,
-                       info.log_dir)
         say(f"pipeline with the selected configuration: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}")
     stages = plan(cfg.baselines)
     results = {}

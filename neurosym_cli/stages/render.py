@@ -9,6 +9,7 @@ from .. import paths
 from ..baselines import get
 from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
+from ..tasks import make_task
 from ..utils.console import log, say
 from ..utils.io import ArtifactError
 from ..utils.device import resolve_device
@@ -97,6 +98,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
     made: dict[str, str] = {}
     step = cfg.render.step
+    task = make_task(cfg.task, cfg.horizon)
     tag = paths.program_tag(_with_baseline(cfg, "prog"))  # the pictures of programs name the program they show
     recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
     if recs:
@@ -113,7 +115,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
         if panels:
             made["trajectories"] = str(fig.trajectories(panels, out / f"trajectories-{tag}.png",
                                                         f"{head}: group paths, prog-retrained solid, dist dashed"))
-    if cfg.task.name == "two-groups-cross" and settings is not None:
+    if getattr(task, "figure1", False) and settings is not None:  # the task asks for the paper's Figure 1
         full, prog = _records(cfg, ["tf-full"], settings[0]), _records(cfg, ["prog-retrained"], settings[0])
         if full and prog:
             made["figure1"] = str(fig.figure1(full[0], prog[0], out / f"figure1-{tag}.png",
@@ -123,14 +125,15 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     if prog:
         prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
         label, rec = prog[0]
-        program = baseline_comm(prog_cfg).program  # type: ignore[attr-defined]
+        comm = baseline_comm(prog_cfg, task)
+        program = comm.program  # type: ignore[attr-defined]
         agent = min(cfg.render.agent, rec.n_agents - 1)
         for r in range(program.n_rounds):
             name = f"rules-{tag}-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
             made[f"rules{r + 1}"] = str(fig.rule_regions(
-                program, cfg.task.kind, cfg.features, rec, agent, min(step, rec.steps - 1), r, out / name,
+                program, comm.fmap, task.pair_dim, rec, agent, min(step, rec.steps - 1), r, out / name,
                 f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
-        if cfg.task.kind == "unlabeled":
+        if not rec.labelled:  # a shared goal set: the paper's Figure 5 (unlabeled goals)
             made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-{tag}-episode{cfg.episode}.png",
                                                       f"{head}: Figure 5, episode {cfg.episode}"))
     if not made:

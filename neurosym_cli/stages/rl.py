@@ -40,7 +40,6 @@ def rl_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     from .train import train
 
     cfg, info = quiet_job(cfg, info)
-    info = RunInfo({**info.config, "rl": dataclasses.asdict(cfg.rl)}, True, info.log_dir)
     train(cfg, info)
     manifest = read_json(paths.train_dir(cfg) / "manifest.json")
     v = validate(dataclasses.replace(cfg, cmd="eval"))
@@ -90,8 +89,7 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     test = {}
     for label, r in (("rl1", rl1), ("rl2", rl2)):
         c = dataclasses.replace(by_name[r["name"]], cmd="eval")
-        test[label] = evaluate_baseline(c, RunInfo({**info.config, "cmd": "eval", "rl": dataclasses.asdict(c.rl)},
-                                                   True, info.log_dir), label=label)
+        test[label] = evaluate_baseline(c, RunInfo(True, info.log_dir), label=label)
     table = [{"name": r["name"], "cost": r["cost"], "shaped": r["shaped"], "init": r["init"],
               "val_loss": r["loss_mean"], "val_loss_ci": r["loss_ci"], "max_in": r["max_in"], "max_out": r["max_out"],
               "max_degree": r["degree"], "train_loss": r["train_loss"], "rollouts": r["rollouts"],
@@ -100,7 +98,7 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     out = Path(cfg.exp_dir) / "rl"
     write_csv(out / "grid.csv", table)
     write_json(out / "grid.json", {**record, "settings": table, "test": test,
-                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "config": info.config})
+                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "config": cfg.record()})
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "

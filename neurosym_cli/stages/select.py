@@ -145,9 +145,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
 
 def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
     """A grid job's config: plain progress lines, no program tables (many run at once)."""
-    return (dataclasses.replace(cfg, progress="plain"),
-            RunInfo({**info.config, "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
-                     "cmd": cfg.cmd, "baseline": dataclasses.asdict(cfg.baseline)}, True, info.log_dir))
+    return dataclasses.replace(cfg, progress="plain"), RunInfo(True, info.log_dir)
 
 
 def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
@@ -307,7 +305,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     test = {}
     for b in ("prog", "prog-retrained"):
         c = dataclasses.replace(chosen, baseline=get(b), cmd="eval")
-        test[b] = evaluate_baseline(c, RunInfo({**info.config, "cmd": "eval"}, True, info.log_dir))
+        test[b] = evaluate_baseline(c, RunInfo(True, info.log_dir))
     table = _table_rows(first, final)
     out = Path(cfg.exp_dir) / "select"
     write_csv(out / "selection.csv", table)
@@ -316,7 +314,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         "finalists": cfg.select.finalists, "programs": first, "retrained": final,
         "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},
         "seconds": {"search_and_validate": t_search, "to_choice": t_select, "total": time.perf_counter() - t0},
-        "jobs": jobs, "config": info.config})
+        "jobs": jobs, "config": cfg.record()})
     print_selection(table, cfg, pick["name"], test)
     say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
         f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "

@@ -1,5 +1,6 @@
 """A program on screen: each rule in the paper's notation beside its plain-language reading, with the objective
-terms of its search when known. Reads text only (no torch), so `neurosym show-program` answers at once."""
+terms of its search when known. Reads text and the task's feature declarations only (no torch), so
+`neurosym show-program` answers at once."""
 
 from __future__ import annotations
 
@@ -12,17 +13,17 @@ from rich.table import Table
 from .. import paths
 from ..config import RunConfig
 from ..dsl.ast import Program, rule_features
-from ..dsl.vocabulary import agent_level
+from ..dsl.vocabulary import FeatureSet
 from ..dsl.printer import describe, rule_text
 from ..utils.console import console
 from ..dsl.files import load_program
 
 
-def _features(rule) -> str:
+def _features(rule, vocab: FeatureSet) -> str:
     """The rule's features, the asking agent's own (my) and the other agent's (its), styled apart."""
     names = sorted(rule_features(rule))
-    mine = [n for n in names if agent_level(n)]
-    its = [n for n in names if not agent_level(n)]
+    mine = [n for n in names if vocab.agent_level(n)]
+    its = [n for n in names if not vocab.agent_level(n)]
     parts = ([f"[cyan]my[/] {', '.join(mine)}"] if mine else []) + ([f"[magenta]its[/] {', '.join(its)}"] if its else [])
     return "; ".join(parts) or "none"
 
@@ -35,7 +36,8 @@ def _stats(info, n_rules: int) -> list[dict] | None:
     return stats if ok else None
 
 
-def render(program: Program, rounds: list[dict] | None, lam: float | None, title: str = "program") -> None:
+def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: float | None,
+           title: str = "program") -> None:
     """Print each rule in the paper's notation beside its reading, and the objective terms when known."""
     for r, rules in enumerate(program.rounds):
         t = Table(show_header=True, header_style="bold", expand=False,
@@ -52,7 +54,7 @@ def render(program: Program, rounds: list[dict] | None, lam: float | None, title
             t.add_column("edges", justify="right")
             t.add_column("Δ objective\nif removed", justify="right")
         for k, rule in enumerate(rules, start=1):
-            row = [str(k), rule_text(rule), _features(rule), describe(rule)]
+            row = [str(k), rule_text(rule), _features(rule, vocab), describe(rule, vocab)]
             if stats:
                 st = stats[k - 1]
                 flags = "".join(f"\n[yellow]{f}[/]" for f in st["flags"])
@@ -106,6 +108,10 @@ def show_program(cfg: RunConfig) -> dict:
     """The program of ``cfg`` (or ``program=PATH``) with the objective terms from its summary.json, if readable."""
     path = paths.program_file(cfg)
     program = load_program(path, None if cfg.program else paths.synth_command(cfg))
+    from .comm import check_program, feature_map
+
+    fmap = feature_map(cfg)
+    check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist
     rounds, lam = None, None
     summary = path.parent / "summary.json"
     if summary.is_file():
@@ -116,5 +122,5 @@ def show_program(cfg: RunConfig) -> dict:
             pass
     if not isinstance(rounds, list) or not isinstance(lam, (int, float)):
         rounds, lam = None, None
-    render(program, rounds, lam, title=str(Path(path)))
+    render(program, fmap.vocab, rounds, lam, title=str(Path(path)))
     return {"program": str(path)}

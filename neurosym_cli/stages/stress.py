@@ -36,11 +36,14 @@ def stress_point(cfg: RunConfig, agents: int, failure: float) -> dict[str, Any]:
     from ..utils.seeding import seed_everything
     from .comm import load_baseline
 
+    from ..tasks import make_task, require
+
     task = dataclasses.replace(cfg.task, agents_per_group=agents, link_failure=failure)
     c = dataclasses.replace(cfg, task=task)  # exp_dir is unchanged: the weights and programs trained at the task's N
+    env = require(make_task(cfg.task, cfg.horizon), "with_team_size", "stress (other team sizes)")(agents)
     device = resolve_device(c.device)
     seed_everything(c.seed)
-    policy, env, comm = load_baseline(c, device)
+    policy, env, comm = load_baseline(c, device, env)
     rows = evaluate(env, policy, comm, list(range(cfg.stress.seeds)), device, c.task.detach_state)
     s = summarize(rows)
     return {m: {k: s[m][k] for k in ("mean", "std", "ci95")} for m in METRICS}
@@ -48,9 +51,10 @@ def stress_point(cfg: RunConfig, agents: int, failure: float) -> dict[str, Any]:
 
 def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """Every (baseline, condition) of ``conditions``; baselines without trained weights are skipped by name."""
-    if cfg.task.kind != "formation":
-        raise ConfigError(f"stress varies the team size of the formation tasks (random-cross, two-groups-cross, "
-                          f"random-grid); {cfg.task.name}'s programs read per-goal features fixed by its N")
+    from ..tasks import make_task, require
+
+    # a task whose programs read features fixed by its N (unlabeled-goals: one per goal) cannot change its team
+    require(make_task(cfg.task, cfg.horizon), "with_team_size", "stress (other team sizes)")
     if cfg.task.link_failure > 0:
         raise ConfigError("stress sets the link failure itself (stress.failure); run it on the failure-free task")
     conds = conditions(cfg)
@@ -80,7 +84,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     out = Path(cfg.exp_dir) / "stress"
     write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
                                      "seeds": cfg.stress.seeds, "results": results, "skipped": skipped,
-                                     "seconds": time.perf_counter() - t0, "config": info.config})
+                                     "seconds": time.perf_counter() - t0, "config": cfg.record()})
     write_csv(out / "stress.csv", [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
                                    for r in results])
     from ..plotting import stress_plot

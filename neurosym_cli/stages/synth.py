@@ -12,7 +12,7 @@ from ..config import ConfigError, RunConfig, UserError
 from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
-from ..envs import make_env
+from ..tasks import make_task
 from ..synth.dataset import DataBucket, load_or_collect, subsample
 from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
@@ -70,7 +70,7 @@ def collect_dataset(cfg: RunConfig):
     seed_everything(cfg.seed)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
     policy = artifacts.policy_from_payload(payload).to(device).eval()
-    env = make_env(cfg.task, cfg.horizon)
+    env = make_task(cfg.task, cfg.horizon)
     data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
                            cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
     return policy, env, data, device
@@ -92,12 +92,12 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     tag = paths.program_tag(cfg)
     for r in range(cfg.task.rounds):
         # appendix A: each round's program is searched alone, the other rounds keep soft attention
-        scorer = CachedScorer(policy, env, cfg.task.kind, data, r, cfg.features, cfg.lam, cfg.synth.objective,
+        scorer = CachedScorer(policy, env, data, r, cfg.features, cfg.lam, cfg.synth.objective,
                               cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
                               backend=cfg.synth.backend)
         coarse = None
         if cfg.synth.coarse > 1:  # the restarts' scorer: every coarse-th state of D, its own random numbers
-            coarse = CachedScorer(policy, env, cfg.task.kind, subsample(data, cfg.synth.coarse), r, cfg.features,
+            coarse = CachedScorer(policy, env, subsample(data, cfg.synth.coarse), r, cfg.features,
                                   cfg.lam, cfg.synth.objective, cfg.rules, cfg.synth.random_samples,
                                   generator(cfg.seed, STREAM_SYNTH, 300 + r), device, backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
@@ -143,11 +143,11 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features, "det": cfg.baseline.det,
         "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(paths.dataset_file(cfg)),
         "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
-        "config": info.config,
+        "config": cfg.record(),
     })
     say(f"[green]synthesized[/] {out / 'program.txt'}")
     if not info.multirun:
-        render(program, rounds, cfg.lam)
+        render(program, env.features(cfg.features).vocab, rounds, cfg.lam)
     return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds),
             "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
 
@@ -165,16 +165,16 @@ def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
 def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out: Path) -> dict:
     """dt (appendix B): per round, label every pair of D by the greedy global hard attention with in- and
     out-degree <= K from the oracle's soft attention, then fit a tree on the pair features."""
-    from ..envs.features import PairFeatures
     from ..synth.tree import fit_tree, greedy_hard_attention, soft_attention
 
     policy = policy.cpu()
+    fmap = make_task(cfg.task, cfg.horizon).features(cfg.features)
     trees, rounds = [], []
     for r in range(cfg.task.rounds):
         xs, ys = [], []
         for b in data:
             labels = greedy_hard_attention(soft_attention(policy, b, r), cfg.rules)  # (S, N, N)
-            feats = PairFeatures(cfg.task.kind, b.agent, b.rel, cfg.features)
+            feats = fmap.view(b.agent, b.rel)
             off = ~torch.eye(b.n_agents, dtype=torch.bool).expand(b.states, -1, -1)
             xs.append(torch.stack([feats[f].expand(b.states, b.n_agents, b.n_agents)[off] for f in feats.names], -1))
             ys.append(labels[off])
@@ -191,6 +191,6 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out
     write_json(out / "tree.json", {"rounds": [t.to_dict() for t in trees]})
     write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
                                       "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
-                                      "config": info.config})
+                                      "config": cfg.record()})
     say(f"[green]fitted[/] {out / 'tree.json'}")
     return {"tree": str(out / "tree.json")}

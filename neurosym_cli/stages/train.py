@@ -13,7 +13,7 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
-from ..envs import make_env
+from ..tasks import make_task, probe
 from ..policy import CommTransformer, make_comm
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..training import FitSpec, FitState, fit
@@ -36,17 +36,20 @@ class Tracked:
         self.tracker.log(step, {f"train/{k}": v for k, v in metrics.items() if k != "step"})
 
 
-def check_compatible(saved: dict, cfg: RunConfig, current: dict, path) -> None:
-    """A checkpoint is resumed or extended only under the same task, model and optimiser config. Keys of the
-    current schemas that a checkpoint lacks (added later) compare as their defaults; keys the schemas no longer
-    have are ignored."""
+def check_compatible(saved: dict, cfg: RunConfig, path) -> None:
+    """A checkpoint is resumed or extended only under the same task, model and optimiser config, compared section
+    by section against the typed config. Fields a checkpoint lacks (added later) compare as their defaults; fields
+    the schemas no longer have are ignored. The message names the first differing key."""
     for key in ("task", "model", "optim"):
-        old, new = saved.get(key) or {}, current.get(key) or {}
+        old = saved.get(key) if isinstance(saved.get(key), dict) else {}
         section = getattr(cfg, key)
-        dflt = {f.name: f.default for f in dataclasses.fields(section) if f.default is not dataclasses.MISSING}
-        if any(old.get(k, dflt.get(k)) != v for k, v in new.items()):
-            raise ConfigError(f"{path} was trained with a different `{key}` config; pass overwrite=true to start over "
-                              f"or runs_root=... to train elsewhere")
+        for f in dataclasses.fields(section):
+            new = getattr(section, f.name)
+            dflt = f.default if f.default is not dataclasses.MISSING else (
+                f.default_factory() if f.default_factory is not dataclasses.MISSING else None)  # type: ignore[misc]
+            if old.get(f.name, dflt) != new:
+                raise ConfigError(f"{path} was trained with {key}.{f.name}={old.get(f.name, dflt)!r}, this run has "
+                                  f"{new!r}; pass overwrite=true to start over or runs_root=... to train elsewhere")
 
 
 def train(cfg: RunConfig, info: RunInfo) -> dict:
@@ -58,25 +61,27 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     if cfg.baseline.comm == "gated":
         return train_rl(cfg, info)
-    env = make_env(cfg.task, cfg.horizon)
+    env = make_task(cfg.task, cfg.horizon)
+    probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
     comm = with_link_failure(make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules),
                              cfg.task.link_failure)
     return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
-                     lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model), "train")
+                     lambda: CommTransformer.for_task(env, cfg.model), "train")
 
 
 def train_rl(cfg: RunConfig, info: RunInfo) -> dict:
     """The rl baseline (paper appendix D): the transformer and its communication gate trained together, the motion
     by backpropagation, the decisions by policy gradient on the cost plus rl.cost times the degree. From the oracle
     (rl.init=oracle) for budget.retrain_rollouts at the retraining rate, or from scratch for the oracle's budget."""
-    env = make_env(cfg.task, cfg.horizon)
-    comm = baseline_comm(cfg)
+    env = make_task(cfg.task, cfg.horizon)
+    probe(env, cfg.task.name)
+    comm = baseline_comm(cfg, env)
     if cfg.rl.init == "oracle":
         payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
         init, rollouts, lr = (lambda: artifacts.policy_from_payload(payload)), cfg.budget.retrain_rollouts, \
             cfg.optim.retrain_lr
     else:
-        init, rollouts, lr = (lambda: CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)), \
+        init, rollouts, lr = (lambda: CommTransformer.for_task(env, cfg.model)), \
             cfg.budget.train_rollouts, None
     return train_run(cfg, info, env, comm, rollouts, init, "train", lr=lr)
 
@@ -87,9 +92,9 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.baseline.model != "retrained":
         raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
                           f"not {cfg.baseline.name}")
-    comm = baseline_comm(cfg)
+    env = make_task(cfg.task, cfg.horizon)
+    comm = baseline_comm(cfg, env)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
-    env = make_env(cfg.task, cfg.horizon)
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
                      lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
                      made_under=comm_identity(cfg, comm))
@@ -119,7 +124,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
     state = None
     if ckpt.exists() and not cfg.overwrite:
         payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
-        check_compatible(payload["config"], cfg, info.config, ckpt)
+        check_compatible(payload["config"], cfg, ckpt)
         if made_under and payload.get("made_under", made_under) != made_under:
             raise ConfigError(f"{ckpt} was retrained under another program (or tree) than the one there now; "
                               "overwrite=true retrains it under this one")
@@ -141,7 +146,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
     def save(st: FitState) -> None:
         fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
                     "gen_state": st.gen_state, "torch_rng": st.torch_rng}
-        payload = artifacts.policy_payload(policy, cfg.model, info.config, fit_dict, done=st.step >= spec.steps)
+        payload = artifacts.policy_payload(policy, cfg.model, cfg.record(), fit_dict, done=st.step >= spec.steps)
         if made_under:
             payload["made_under"] = made_under
         if gate is not None:
@@ -169,7 +174,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         "final_loss_steps": len(last),
         "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
         "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
-        "hydra_dir": info.log_dir, "config": info.config,
+        "hydra_dir": info.log_dir, "config": cfg.record(),
     })
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "

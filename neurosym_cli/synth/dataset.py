@@ -17,7 +17,7 @@ import torch
 from torch import Tensor
 
 from ..artifacts import load_payload, save_checkpoint
-from ..envs.base import MultiAgentEnv, Rng
+from ..tasks.base import Task, Rng
 from ..utils.console import log
 from ..utils.io import ArtifactError
 from ..policy.comm import CommContext, FullComm
@@ -39,7 +39,7 @@ class DataBucket:
         return self.agent.shape[1]
 
 
-def collect(env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: int, gen: torch.Generator,
+def collect(env: Task, policy: CommTransformer, rollouts: int, stride: int, gen: torch.Generator,
             device: torch.device, chunk: int = 50) -> list[DataBucket]:
     """Roll out the oracle ``rollouts`` times (in chunks), keeping every ``stride``-th step."""
     by_n: dict[int, list[tuple[Tensor, Tensor, Tensor]]] = {}
@@ -58,7 +58,7 @@ def collect(env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: 
                     out = policy(obs, lambda logits, r: full.select(ctx, logits, r))
                     if t % stride == 0:
                         by_n.setdefault(state.n_agents, []).append(
-                            (obs.agent.cpu(), obs.rel.cpu(), env.effective_action(out.action).cpu()))
+                            (obs.agent.cpu(), obs.rel.cpu(), env.target(out.action).cpu()))
                     state = env.step(state, out.action)
             done += batch
     return [DataBucket(*(torch.cat([x[k] for x in items]) for k in range(3))) for _, items in sorted(by_n.items())]
@@ -90,7 +90,7 @@ def fingerprint(policy: CommTransformer) -> str:
     return h.hexdigest()
 
 
-def load_or_collect(path: Path, made_by: str, env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: int,
+def load_or_collect(path: Path, made_by: str, env: Task, policy: CommTransformer, rollouts: int, stride: int,
                     gen: torch.Generator, device: torch.device) -> list[DataBucket]:
     """The dataset D at ``path`` when it was collected from these oracle weights, else collected and saved there
     (once per oracle, rollouts and stride: every synthesis run of a sweep reuses it)."""

@@ -30,8 +30,7 @@ from torch import Tensor
 
 from ..dsl.ast import Program, RandomRule, Rule
 from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
-from ..envs.base import MultiAgentEnv, Observation
-from ..envs.features import PairFeatures
+from ..tasks.base import Task, Observation
 from ..policy.transformer import CommTransformer
 from . import kernels
 from .dataset import DataBucket
@@ -94,7 +93,7 @@ class _Current:
 class CachedScorer:
     """Incremental scorer of programs for one communication round (paper appendix A: one program per round)."""
 
-    def __init__(self, policy: CommTransformer, env: MultiAgentEnv, kind: str, buckets: list[DataBucket],
+    def __init__(self, policy: CommTransformer, env: Task, buckets: list[DataBucket],
                  round_idx: int, version: str, lam: float, objective: str, cap: int, samples: int,
                  gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto"):
         self.policy = policy.eval()
@@ -107,7 +106,8 @@ class CachedScorer:
         self.uniform_seed = int(torch.randint(0, 2**62, (1,), generator=gen))
         self.last_round = round_idx == policy.n_rounds - 1
         with torch.no_grad():
-            self.data = [Prepared(policy, kind, b, round_idx, version, device, memo=self.last_round)
+            self.fmap = env.features(version)  # the task's feature map the programs read (version v1, v2)
+            self.data = [Prepared(policy, self.fmap, b, round_idx, device, memo=self.last_round)
                          for b in buckets]
         self.total_states = sum(d.s for d in self.data)
         self.rule_cache: OrderedDict[tuple, list[Tensor]] = OrderedDict()
@@ -197,7 +197,7 @@ class CachedScorer:
     def _l1_rows(self, d: Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """(M,) L1 action error of the given rows (only valid for the last round)."""
         y = self._round_out(d, rows, picks, valid)
-        a = self.env.effective_action(self.policy.head(y))
+        a = self.env.target(self.policy.head(y))
         return (a - d.target_flat.index_select(0, rows)).abs().sum(-1)
 
     def _l1_later(self, d: Prepared, x: Tensor) -> Tensor:
@@ -205,7 +205,7 @@ class CachedScorer:
         y = x.view(d.s, d.n, -1)
         for (a, c), layer in zip(d.later, self.policy.rounds[self.round + 1:]):
             y = layer._post(y, torch.bmm(a, layer.value(y)) + c)
-        out = self.env.effective_action(self.policy.head(y))
+        out = self.env.target(self.policy.head(y))
         return (out - d.target).abs().sum(-1).flatten()
 
     # ------------------------------------------------------------------------------------------ score
@@ -355,7 +355,7 @@ class CachedScorer:
                 for s0 in range(0, d.s, chunk):
                     sl = slice(s0, min(s0 + chunk, d.s))
                     obs = Observation(d.agent[sl], d.rel[sl])
-                    feats = PairFeatures(d.feats.kind, d.agent[sl], d.rel[sl], d.feats.version)
+                    feats = self.fmap.view(d.agent[sl], d.rel[sl])
                     masks = {}
 
                     def select(logits: Tensor, q: int) -> Tensor:
@@ -369,7 +369,7 @@ class CachedScorer:
                         return picks_to_mask(picks, d.n)
 
                     out = self.policy(obs, select)
-                    a = self.env.effective_action(out.action)
+                    a = self.env.target(out.action)
                     l1_sum += float((a - d.target[sl]).abs().sum())
                     pk = masks["picks"]
                     deg_sum += float(degree_term(pk, dedup_valid(pk), d.n, self.objective, self.cap).sum())

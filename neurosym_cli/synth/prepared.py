@@ -9,7 +9,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
-from ..envs.features import PairFeatures
+from ..tasks.features import FeatureMap
 from ..policy.transformer import CommTransformer, selected_attention
 from .dataset import DataBucket
 
@@ -19,11 +19,11 @@ MEMO = 4  # memo slots per agent
 class Prepared:
     """Program-independent tensors of one bucket."""
 
-    def __init__(self, policy: CommTransformer, kind: str, b: DataBucket, round_idx: int, version: str,
+    def __init__(self, policy: CommTransformer, fmap: FeatureMap, b: DataBucket, round_idx: int,
                  device: torch.device, memo: bool):
         self.s, self.n = b.states, b.n_agents
         self.agent, self.rel, self.target = b.agent.to(device), b.rel.to(device), b.target.to(device)
-        self.feats = PairFeatures(kind, self.agent, self.rel, version)
+        self.feats = fmap.view(self.agent, self.rel)
         h = torch.relu(policy.embed(self.agent))  # (S, N, D)
         # per round (S, N, N); in chunks of ~1M pairs, since the keys are (S, N, N, D) before the reduction
         ch = max(1, 1_000_000 // (self.n * self.n))

@@ -50,7 +50,9 @@ def search_round(scorer: CachedScorer, spec: RoundSpec, seed: str, gen: torch.Ge
                  on_step: Callable | None = None, coarse: CachedScorer | None = None) -> SearchResult:
     """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw. ``coarse`` (the same objective
     on a subsample of D) scores the restarts; the feature quantiles always come from the whole of D."""
-    space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det, spec.own_scores)
+    vocab = scorer.fmap.vocab
+    space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det, spec.own_scores,
+                        frozenset(n for n in vocab.names if vocab.agent_level(n)))
     rng = random.Random(seed)
     return metropolis(
         init=lambda: random_rules(space, rng),

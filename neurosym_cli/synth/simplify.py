@@ -19,17 +19,14 @@ from dataclasses import replace
 import torch
 
 from ..dsl.ast import And, Cond, Or, Rule, Test, TrueCond
+from ..dsl.vocabulary import FeatureSet
 from ..dsl.interpret import cond, dedup_valid
 from ..dsl.printer import cond_text, rule_text
 from .objective import CachedScorer
 
-def _range(name: str) -> tuple[float, float]:
-    """The values a feature can take at all (norms are >= 0, angles lie in (-pi, pi])."""
-    if name.endswith("theta"):
-        return -math.pi, math.pi
-    if name.endswith("d") and "_" not in name:  # a norm: d, gd, pd, g3d (v2 products contain "_")
-        return 0.0, math.inf
-    return -math.inf, math.inf
+def _range(name: str, vocab: FeatureSet) -> tuple[float, float]:
+    """The values a feature can take at all, as the task declares them (norms are >= 0, angles lie in (-pi, pi])."""
+    return vocab.bounds(name) if name in vocab else (-math.inf, math.inf)
 
 
 def _bounds(t: Test) -> tuple[str, float, float] | None:
@@ -42,19 +39,19 @@ def _bounds(t: Test) -> tuple[str, float, float] | None:
     return (name, t.threshold / w, math.inf) if w > 0 else (name, -math.inf, t.threshold / w)
 
 
-def always_holds(c: Cond) -> bool:
+def always_holds(c: Cond, vocab: FeatureSet) -> bool:
     """True when every pair passes ``c``, whatever the data: ``true``, a bound every value of the feature meets
     (``d >= -0.6``: a distance is never negative), or an ``or`` with such a branch."""
     if isinstance(c, TrueCond):
         return True
     if isinstance(c, Or):
-        return always_holds(c.left) or always_holds(c.right)
+        return always_holds(c.left, vocab) or always_holds(c.right, vocab)
     if isinstance(c, And):
-        return always_holds(c.left) and always_holds(c.right)
+        return always_holds(c.left, vocab) and always_holds(c.right, vocab)
     b = _bounds(c) if isinstance(c, Test) else None
     if b is None:
         return False
-    lo0, hi0 = _range(b[0])
+    lo0, hi0 = _range(b[0], vocab)
     return b[1] <= lo0 and b[2] >= hi0
 
 
@@ -62,13 +59,13 @@ def _conjuncts(c: Cond) -> list[Cond]:
     return _conjuncts(c.left) + _conjuncts(c.right) if isinstance(c, And) else [c]
 
 
-def never_holds(c: Cond) -> bool:
+def never_holds(c: Cond, vocab: FeatureSet) -> bool:
     """True when no pair of agents can pass ``c``, whatever the data: contradictory bounds on one feature inside
     an ``and`` chain, or a bound outside the feature's range."""
     if isinstance(c, Or):
-        return never_holds(c.left) and never_holds(c.right)
+        return never_holds(c.left, vocab) and never_holds(c.right, vocab)
     parts = _conjuncts(c)
-    if any(isinstance(p, Or) and never_holds(p) for p in parts):
+    if any(isinstance(p, Or) and never_holds(p, vocab) for p in parts):
         return True
     box: dict[str, tuple[float, float]] = {}
     for p in parts:
@@ -76,7 +73,7 @@ def never_holds(c: Cond) -> bool:
         if b is None:
             continue
         name, lo, hi = b
-        lo0, hi0 = box.get(name, _range(name))
+        lo0, hi0 = box.get(name, _range(name, vocab))
         box[name] = (max(lo0, lo), min(hi0, hi))
     return any(lo > hi for lo, hi in box.values())
 
@@ -142,7 +139,7 @@ def rule_stats(scorer: CachedScorer, rules: tuple[Rule, ...]) -> list[dict]:
         for _, clause, _ in _clauses(r.cond) or [((), r.cond, "")]:
             if isinstance(clause, TrueCond):
                 continue
-            if never_holds(clause):
+            if never_holds(clause, scorer.fmap.vocab):
                 flags.append(f"`{cond_text(clause)}` can never hold")
         out.append({"rule": k + 1, "text": rule_text(r), "fires": rate,
                     "edge_share": edges[k] / total_edges if total_edges else 0.0,
@@ -159,27 +156,27 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
     while changed:
         changed = False
         for k, r in enumerate(rules):
-            if isinstance(r.cond, Or) and (always_holds(r.cond) or _pass_rate(scorer, r.cond) == 1.0):
+            if isinstance(r.cond, Or) and (always_holds(r.cond, scorer.fmap.vocab) or _pass_rate(scorer, r.cond) == 1.0):
                 cand = rules[:k] + (replace(r, cond=TrueCond()),) + rules[k + 1:]
                 new = scorer.score(cand).total
                 if new <= best + tol * max(1.0, abs(best)):
-                    why = "always holds" if always_holds(r.cond) else "holds for every pair of D"
+                    why = "always holds" if always_holds(r.cond, scorer.fmap.vocab) else "holds for every pair of D"
                     done.append(f"rule {k + 1}: filter `{cond_text(r.cond)}` became `true` ({why}); "
                                 f"objective {best:.4f} -> {new:.4f}")
                     rules, best, changed = cand, new, True
                     break
             for path, clause, op in _clauses(r.cond):
-                rate = 0.0 if never_holds(clause) else _pass_rate(scorer, clause)
-                idle = (op == "and" and (rate == 1.0 or always_holds(clause))) or (op == "or" and rate == 0.0) \
-                    or never_holds(clause)
+                rate = 0.0 if never_holds(clause, scorer.fmap.vocab) else _pass_rate(scorer, clause)
+                idle = (op == "and" and (rate == 1.0 or always_holds(clause, scorer.fmap.vocab))) or (op == "or" and rate == 0.0) \
+                    or never_holds(clause, scorer.fmap.vocab)
                 if not idle:
                     continue
-                if op == "and" and never_holds(clause):
+                if op == "and" and never_holds(clause, scorer.fmap.vocab):
                     continue  # an impossible conjunct makes the whole and impossible: not a no-op to drop
                 cand = rules[:k] + (replace(r, cond=_drop(r.cond, path)),) + rules[k + 1:]
                 new = scorer.score(cand).total
                 if new <= best + tol * max(1.0, abs(best)):
-                    why = ("can never hold" if never_holds(clause) else "always holds" if always_holds(clause) else
+                    why = ("can never hold" if never_holds(clause, scorer.fmap.vocab) else "always holds" if always_holds(clause, scorer.fmap.vocab) else
                            "holds for every pair of D" if rate == 1.0 else "holds for no pair of D")
                     done.append(f"rule {k + 1}: dropped `{cond_text(clause)}` from its filter ({why}); "
                                 f"objective {best:.4f} -> {new:.4f}")

@@ -15,7 +15,7 @@ import torch
 from torch import Tensor
 
 from ..config import UserError
-from ..envs.features import PairFeatures
+from ..tasks.features import FeatureView
 from ..utils.ops import softmax_last
 from ..policy.transformer import CommTransformer
 from .dataset import DataBucket
@@ -101,7 +101,7 @@ class TreeModel:
         return (children, torch.tensor(self.feature).clamp(min=0), torch.tensor(self.threshold, dtype=torch.float32),
                 torch.tensor(self.label), depth)
 
-    def predict(self, feats: PairFeatures) -> Tensor:
+    def predict(self, feats: FeatureView) -> Tensor:
         """(B, N, N) bool: the tree's decision for every pair (self removed by the caller's mask)."""
         b, n = feats.batch, feats.n_agents
         dev = feats.device

@@ -50,6 +50,6 @@ class TensorBoardTracker(Tracker):
         self.writer.close()
 
 
-def open_tracker(kind: str, logdir: Path, start: int = 0) -> Tracker:
-    """The tracker of ``logger=<kind>`` for one run, writing under ``logdir``; ``start``: the step resumed from."""
-    return TensorBoardTracker(logdir, start) if kind == "tensorboard" else Tracker()
+def open_tracker(logger: str, logdir: Path, start: int = 0) -> Tracker:
+    """The tracker of ``logger=<logger>`` for one run, writing under ``logdir``; ``start``: the step resumed from."""
+    return TensorBoardTracker(logdir, start) if logger == "tensorboard" else Tracker()

@@ -22,7 +22,7 @@ import torch
 from ..dsl.ast import ArgMaxRule, Program
 from ..dsl.interpret import cond, linear
 from ..dsl.printer import describe, rule_text
-from ..envs.features import PairFeatures
+from ..tasks.features import FeatureMap
 from ..episode import EpisodeRecord
 from .draw import (GROUP_COLORS, RULE_COLORS, edge_segments, frame_limits, group_color, matplotlib_agg, save_figure,
                    wrap_title)
@@ -173,7 +173,7 @@ def unlabeled_scene(label: str, rec: EpisodeRecord, step: int, path: Path, title
     return save_figure(fig, path)
 
 
-def rule_grid(program: Program, round_: int, kind: str, features: str, agent_input: np.ndarray,
+def rule_grid(program: Program, round_: int, fmap: FeatureMap, pair_dim: int, agent_input: np.ndarray,
               origin: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> list[tuple[np.ndarray, np.ndarray | None]]:
     """For each rule of the round: where a hypothetical other agent at each grid point passes the rule's filter,
     (len(ys), len(xs)) bool, and for an argmax rule the score it would get there (else None).
@@ -184,10 +184,10 @@ def rule_grid(program: Program, round_: int, kind: str, features: str, agent_inp
     pts = np.stack([gx.ravel(), gy.ravel()], -1) - origin  # (G, 2): o_ij of the hypothetical agent
     g = len(pts)
     agent = torch.as_tensor(agent_input, dtype=torch.float32).expand(g, 2, -1)
-    rel = torch.zeros(g, 2, 2, 2)
-    rel[:, 0, 1] = torch.as_tensor(pts, dtype=torch.float32)
-    rel[:, 1, 0] = -rel[:, 0, 1]
-    feats = PairFeatures(kind, agent, rel, features)
+    rel = torch.zeros(g, 2, 2, pair_dim)  # columns beyond the offset (velocities, ...) are 0: an agent at rest
+    rel[:, 0, 1, :2] = torch.as_tensor(pts, dtype=torch.float32)
+    rel[:, 1, 0, :2] = -rel[:, 0, 1, :2]
+    feats = fmap.view(agent, rel)
     out = []
     for rule in program.rounds[round_]:
         keep = cond(rule.cond, feats)[:, 0, 1].reshape(gy.shape).numpy()
@@ -197,7 +197,7 @@ def rule_grid(program: Program, round_: int, kind: str, features: str, agent_inp
     return out
 
 
-def rule_regions(program: Program, kind: str, features: str, rec: EpisodeRecord, agent: int, step: int,
+def rule_regions(program: Program, fmap: FeatureMap, pair_dim: int, rec: EpisodeRecord, agent: int, step: int,
                  round_: int, path: Path, title: str, grid: int = 160) -> Path:
     """Figure 4: one panel per rule, for agent ``agent`` at ``step``: shaded where another agent would pass the
     rule's filter; for an argmax rule, the score there as a heat map; the other agents as dots and the agent the
@@ -206,7 +206,7 @@ def rule_regions(program: Program, kind: str, features: str, rec: EpisodeRecord,
     rules = program.rounds[round_]
     xlim, ylim, _ = frame_limits(rec.pos[step], rec.goal, ratio=(0.8, 1.25))
     xs, ys = np.linspace(*xlim, grid), np.linspace(*ylim, grid)
-    regions = rule_grid(program, round_, kind, features, rec.inputs[step, agent], rec.pos[step, agent], xs, ys)
+    regions = rule_grid(program, round_, fmap, pair_dim, rec.inputs[step, agent], rec.pos[step, agent], xs, ys)
     cols = min(len(rules), 3)
     rows = (len(rules) + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 5.4 * rows), dpi=110, squeeze=False)
@@ -242,7 +242,7 @@ def rule_regions(program: Program, kind: str, features: str, rec: EpisodeRecord,
         ax.set_xlim(*xlim)
         ax.set_ylim(*ylim)
         kind_text = "shaded: passes the filter" if score is None else "coloured: passes the filter"
-        reading = textwrap.fill(describe(rule), 70)
+        reading = textwrap.fill(describe(rule, fmap.vocab), 70)
         ax.set_title(f"rule {k + 1}: {rule_text(rule)}\n{reading}\n({kind_text})", fontsize=7)
         ax.legend(fontsize=6, loc="lower right", framealpha=0.8)
         ax.tick_params(labelsize=7)

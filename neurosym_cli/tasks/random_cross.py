@@ -5,32 +5,65 @@ the box opposite its start; one group is always present, each other one with pro
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
 
-import torch
-from torch import Tensor
+from ..errors import ConfigError, check as _check
+from ..utils.lazy import LazyModule
+from .formation import FormationConfig, FormationState, FormationTask
 
-from ..config import ConfigError, CrossConfig
-from .base import EnvState
-from .formation import FormationEnv
+if TYPE_CHECKING:
+    import torch
+    from torch import Tensor
+else:
+    torch = LazyModule("torch")
 
 
-class RandomCrossEnv(FormationEnv):
+@dataclass
+class CrossConfig(FormationConfig):
+    """random-cross and two-groups-cross: the groups sit on a circle of radius l and cross to the opposite box."""
+
+    _target_: str = "neurosym_cli.tasks.random_cross.RandomCrossTask"
+    num_groups: int = 4
+    """possible groups (4 = paper random-cross, 2 = two-groups-cross)"""
+    group_prob: float = 0.33
+    """probability that each non-guaranteed group is present (paper section 4; one group always is)"""
+
+    @property
+    def max_agents(self) -> int:
+        """N of the largest episode (every group present)."""
+        return self.num_groups * self.agents_per_group
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(self.num_groups >= 1, "task.num_groups must be positive")
+        _check(0.0 <= self.group_prob <= 1.0, "task.group_prob must lie in [0, 1]")
+
+
+class RandomCrossTask(FormationTask):
     """Cross layout: group k starts at R(2 pi k / G) (-l, 0) and flies to the opposite box."""
 
-    def __init__(self, cfg: CrossConfig, horizon: int | None = None):
-        super().__init__(cfg, horizon)
-        g = cfg.num_groups
+    Config = CrossConfig
+
+    @cached_property
+    def start_centers(self) -> Tensor:
+        """(G, 2) box centres where the groups start (reference tasks/random_cross.py)."""
+        g = self.cfg.num_groups
         ang = torch.tensor([2 * math.pi * k / g for k in range(g)], dtype=torch.float64)
-        # group k starts at R(theta_k) (-l, 0) and flies to the opposite box (reference tasks/random_cross.py)
-        self.start_centers = (torch.stack([-torch.cos(ang), -torch.sin(ang)], -1) * cfg.ell).float()  # (G, 2)
-        self.goal_centers = -self.start_centers
+        # group k starts at R(theta_k) (-l, 0) and flies to the opposite box
+        return (torch.stack([-torch.cos(ang), -torch.sin(ang)], -1) * self.cfg.ell).float()
+
+    @property
+    def goal_centers(self) -> Tensor:
+        return -self.start_centers
 
     def _cross_centers(self, present: Tensor) -> tuple[Tensor, Tensor]:
         """present: (E, G) bool with the same count per row -> start/goal centres (E, g, 2)."""
         idx = torch.nonzero(present)[:, 1].reshape(present.shape[0], -1)  # (E, g) present groups in index order
         return self.start_centers[idx], self.goal_centers[idx]
 
-    def reset(self, batch: int, gen: torch.Generator) -> list[EnvState]:
+    def reset(self, batch: int, gen: torch.Generator) -> list[FormationState]:
         """Sample ``batch`` random episodes, returned as buckets of equal agent count."""
         c = self.cfg
         g = c.num_groups
@@ -43,7 +76,7 @@ class RandomCrossEnv(FormationEnv):
             buckets.append(self._bucket(*self._cross_centers(present[counts == k]), gen))
         return buckets
 
-    def setting(self, name: str, gen: torch.Generator) -> EnvState:
+    def setting(self, name: str, gen: torch.Generator) -> FormationState:
         """One episode of a fixed test setting: the present groups, as in '0-2'."""
         try:
             groups = sorted({int(t) for t in name.split("-")})

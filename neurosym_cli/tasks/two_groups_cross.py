@@ -4,12 +4,15 @@ groups, a task of its own so that the figure's setting is one command away."""
 
 from __future__ import annotations
 
-from ..config import ConfigError, CrossConfig
-from .random_cross import RandomCrossEnv
+from ..errors import ConfigError
+from .random_cross import CrossConfig, RandomCrossTask
 
 
-class TwoGroupsCrossEnv(RandomCrossEnv):
-    """random-cross's dynamics and sampling with exactly two groups, facing each other across the origin."""
+class TwoGroupsCrossTask(RandomCrossTask):
+    """random-cross's dynamics and sampling with exactly two groups, facing each other across the origin.
+    `neurosym figures` draws the paper's Figure 1 for it (``figure1 = True``)."""
+
+    figure1 = True
 
     def __init__(self, cfg: CrossConfig, horizon: int | None = None):
         if cfg.num_groups != 2:

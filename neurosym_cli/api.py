@@ -1,0 +1,210 @@
+"""The Python API: the verbs of the command line as functions, on the same typed config (docs/extending.md).
+
+    import neurosym as ns
+
+    cfg = ns.compose(task="random-grid", budget="tiny", seed=1)          # keyword overrides; dotted keys as a dict
+    ns.train(cfg)                                                         # the oracle (tf-full)
+    program = ns.synth(cfg)                                               # a Program (dsl/ast.py)
+    ns.retrain(cfg)                                                       # prog-retrained
+    metrics = ns.evaluate(cfg, "prog-retrained")                         # {metric: {mean, std, ci95, n}}
+    picks = ns.picks(program, cfg, agent, rel)                            # whom each agent hears, (B, N, K)
+
+Every function is quiet unless ``verbose=True`` (no tables, no progress lines: warnings only), returns objects,
+writes the same artifacts as the command line (under ``cfg.runs_root``), and records the full typed config
+beside them. Your own task: ``ns.compose(task="ring", config_dir="examples/ring/conf")``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import logging
+from pathlib import Path
+from typing import Any, Iterator, Mapping
+
+from .config import RunConfig
+from .dsl.ast import Program
+from .stages import RunInfo
+
+COMMANDS = ("train", "synth", "retrain", "eval", "pipeline", "select", "show_program", "stress", "rl", "render",
+            "figures", "report")
+
+
+def _value(v: Any) -> str:
+    """A Python value as Hydra override text."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (list, tuple)):
+        return "[" + ",".join(_value(x) for x in v) + "]"
+    if v is None:
+        return "null"
+    return str(v)
+
+
+def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None = None, *,
+            config_dir: str | Path | None = None, **kwargs: Any) -> RunConfig:
+    """The typed config ``neurosym <cmd>`` would run with: ``compose(task="random-grid", rules=3)`` is
+    ``neurosym train task=random-grid rules=3``; dotted keys go in ``overrides`` (``{"task.radius": 4.0}``, or a
+    list of override strings). ``config_dir``: your own config directory (its task/ YAMLs), as ``--config-dir``.
+    Bad input raises UserError with the CLI's one-line message."""
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_module
+
+    from .commands import COMMANDS as VERBS
+    from .commands._run import typed_config
+    from .errors import UserError
+    from .overrides import check
+    from .tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
+
+    name = VERBS[cmd][0] if cmd in VERBS else cmd
+    if name not in COMMANDS:
+        raise UserError(f"unknown command {cmd!r}; choose one of: {', '.join(VERBS)}")
+    items = list(overrides) if isinstance(overrides, list) else [f"{k}={_value(v)}" for k, v in
+                                                                  {**(overrides or {})}.items()]
+    items += [f"{k}={_value(v)}" for k, v in kwargs.items()]
+    extra = ["--config-dir", str(config_dir)] if config_dir else []
+    add_import_paths(import_paths(extra))
+    schemas = task_schemas(items + extra, name)
+    bad = check(items, schemas)
+    if bad:
+        raise UserError(bad)
+    items = force_task_keys(items, schemas)
+    if config_dir:
+        items.append(f"hydra.searchpath=[file://{Path(config_dir).absolute()}]")
+    from omegaconf.errors import OmegaConfBaseException
+
+    try:
+        with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
+            cfg = hydra_compose(name, overrides=items)
+    except Exception as e:  # Hydra's missing option, grammar errors: one line, as on the command line
+        if isinstance(e, UserError):
+            raise
+        raise UserError(str(e).splitlines()[0] if str(e) else type(e).__name__) from None
+    try:
+        return typed_config(cfg)
+    except OmegaConfBaseException as e:
+        raise UserError(str(e).splitlines()[0]) from None
+
+
+@contextlib.contextmanager
+def _quiet(verbose: bool) -> Iterator[None]:
+    """No tables or progress lines unless ``verbose`` (the rich console is muted; warnings still log)."""
+    from .utils.console import console, log
+
+    if verbose:
+        yield
+        return
+    old_quiet, old_level = console.quiet, log.level
+    console.quiet, log.level = True, logging.WARNING
+    try:
+        yield
+    finally:
+        console.quiet, log.level = old_quiet, old_level
+
+
+def _with(cfg: RunConfig, cmd: str, baseline: str | None) -> RunConfig:
+    from .baselines import get
+
+    cfg = dataclasses.replace(cfg, cmd=cmd, progress="plain")
+    if baseline is not None:
+        cfg = dataclasses.replace(cfg, baseline=get(baseline))
+    if cfg.threads:
+        import torch
+
+        torch.set_num_threads(cfg.threads)
+    return cfg
+
+
+def _selected(cfg: RunConfig) -> RunConfig:
+    if cfg.selected:
+        from .stages.select import apply_selected
+
+        return apply_selected(cfg)
+    return cfg
+
+
+def train(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> dict:
+    """Train the oracle (``cfg.baseline``, tf-full by default) or a baseline's own model (dist, no-comm, rl);
+    resumes an interrupted run. Returns the manifest: checkpoint path, final loss, rollouts, seconds."""
+    from .stages.train import train as run
+
+    with _quiet(verbose):
+        return run(_with(_selected(cfg), "train", baseline), RunInfo(multirun=not verbose))
+
+
+def synth(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> Program | None:
+    """Synthesize the program of ``cfg`` (prog, or det-prog; dt fits a tree and returns None) on the oracle's
+    dataset, or reuse the one there. Returns the program."""
+    from .dsl.files import load_program
+    from . import paths
+    from .stages.synth import synthesize
+
+    c = _with(_selected(cfg), "synth", baseline or ("prog" if cfg.baseline.name == "tf-full" else None))
+    with _quiet(verbose):
+        synthesize(c, RunInfo(multirun=not verbose))
+    return None if c.baseline.comm == "tree" else load_program(paths.program_file(c), paths.synth_command(c))
+
+
+def retrain(cfg: RunConfig, baseline: str = "prog-retrained", verbose: bool = False) -> dict:
+    """Retrain the oracle under the program (or tree) of ``cfg`` (paper section 3.5). Returns the manifest."""
+    from .stages.train import retrain as run
+
+    with _quiet(verbose):
+        return run(_with(_selected(cfg), "retrain", baseline), RunInfo(multirun=not verbose))
+
+
+def evaluate(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> dict:
+    """Evaluate a baseline on the test seeds (``budget.eval_seeds``); returns its summary: metric -> mean, std,
+    ci95 (a 95 % interval over the evaluation seeds of this one trained model), n."""
+    from .stages.evaluate import evaluate_baseline
+
+    with _quiet(verbose):
+        return evaluate_baseline(_with(_selected(cfg), "eval", baseline), RunInfo(multirun=not verbose))
+
+
+def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
+    """Every stage of ``cfg.baselines`` (train, synth, retrain, eval), reusing what exists."""
+    from .stages.pipeline import run_pipeline
+
+    with _quiet(verbose):
+        return run_pipeline(dataclasses.replace(cfg, cmd="pipeline"), RunInfo(multirun=not verbose))
+
+
+def load_program(path: str | Path) -> Program:
+    """A program file, read by the project's own parser (errors name line and column), never evaluated as code."""
+    from .dsl.files import load_program as load
+
+    return load(Path(path), None)
+
+
+def task(cfg: RunConfig):
+    """The task of a config (its class from ``task._target_``), for rollouts and feature maps of your own."""
+    from .tasks import make_task
+
+    return make_task(cfg.task, cfg.horizon)
+
+
+def picks(program: Program, cfg: RunConfig, agent, rel, round: int = 0, seed: int = 0):
+    """Whom each agent hears under ``program`` for observations you supply: ``agent`` (B, N, Ds) or (N, Ds), each
+    agent's own input, and ``rel`` (B, N, N, Dp) or (N, N, Dp), o_ij = agent i's view of agent j, in the task's
+    units (cfg.features names the feature map). Returns (B, N, K) (or (N, K)) long agent indices, -1 = nobody;
+    random rules draw from a generator seeded with ``seed``."""
+    import torch
+
+    from .dsl.interpret import program_picks
+    from .stages.comm import check_program
+    from .tasks import Rng
+
+    t = task(cfg)
+    fmap = t.features(cfg.features)
+    check_program(program, cfg, "program", fmap)
+    agent, rel = torch.as_tensor(agent, dtype=torch.float32), torch.as_tensor(rel, dtype=torch.float32)
+    single = agent.dim() == 2
+    if single:
+        agent, rel = agent[None], rel[None]
+    gen = torch.Generator().manual_seed(seed)
+    out = program_picks(program, min(round, program.n_rounds - 1), fmap.view(agent, rel), Rng(gen))
+    return out[0] if single else out
+
+
+__all__ = ["compose", "evaluate", "load_program", "picks", "pipeline", "retrain", "synth", "task", "train"]

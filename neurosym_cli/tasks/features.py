@@ -1,0 +1,139 @@
+"""The feature map phi(s_i, o_ij) of the programs (paper section 3.2): a task's declared features
+(dsl/vocabulary.py: names, subjects, words, units, bounds) and how each is computed from an observation.
+
+The paper's tasks build theirs from 2-D vectors (:func:`vector_map`): every 2-D vector of the agent's state and
+the observation of j, each with its norm and angle (version 1); version 2 adds the products of the first state
+vector's x, y with o_ij's x, y. Agent features are (B, N, 1) and broadcast over j; features of the other agent
+are (B, N, N).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Callable, Mapping, Sequence
+
+from ..dsl.vocabulary import VERSIONS, Feature, FeatureSet, product_features, vector_features
+from ..errors import ConfigError
+from ..utils.lazy import LazyModule
+
+if TYPE_CHECKING:
+    import numpy as np
+    import torch
+    from torch import Tensor
+else:
+    torch = LazyModule("torch")
+
+FeatureFn = Callable[["FeatureView"], "Tensor"]
+"""(view) -> (B, N, 1) for a feature of the asking agent, (B, N, N) for one of the other agent"""
+
+
+@dataclass(frozen=True)
+class FeatureMap:
+    """A task's feature map: the declaration (``vocab``) and one function per feature."""
+
+    vocab: FeatureSet
+    fns: Mapping[str, FeatureFn] = field(repr=False)
+    version: str = "v1"
+
+    def __post_init__(self) -> None:
+        missing = [n for n in self.vocab.names if n not in self.fns]
+        if missing:
+            raise ConfigError(f"feature map declares {', '.join(missing)} without a function to compute it")
+
+    @property
+    def names(self) -> list[str]:
+        return self.vocab.names
+
+    def view(self, agent: Tensor, rel: Tensor) -> "FeatureView":
+        """The features of one bucket's observation: agent (B, N, Ds), rel (B, N, N, Dp)."""
+        return FeatureView(self, agent, rel)
+
+
+class FeatureView:
+    """A bucket's features, looked up by name and computed once each."""
+
+    def __init__(self, fmap: FeatureMap, agent: Tensor, rel: Tensor):
+        self.fmap, self.version = fmap, fmap.version
+        self.batch, self.n_agents = agent.shape[0], agent.shape[1]
+        self.device = agent.device
+        self.agent, self.rel = agent, rel  # (B, N, Ds), (B, N, N, Dp)
+        self._cache: dict[str, Tensor] = {}
+        self.names = fmap.names
+
+    def __getitem__(self, name: str) -> Tensor:
+        if name not in self._cache:
+            if name not in self.fmap.fns:
+                raise KeyError(f"unknown feature {name!r}; this task has: {', '.join(self.names)}")
+            self._cache[name] = self.fmap.fns[name](self)
+        return self._cache[name]
+
+    def stacked(self) -> tuple[list[str], list[str], "np.ndarray", "np.ndarray"]:
+        """(pair feature names, agent feature names, pair values (P, B N N), agent values (A, B N)) as float32
+        numpy arrays on the CPU (for compiled rule scans); the view then serves its features from these arrays."""
+        b, n = self.batch, self.n_agents
+        vocab = self.fmap.vocab
+        pair = [nm for nm in self.names if not vocab.agent_level(nm)]  # of o_ij: (B, N, N)
+        agent = [nm for nm in self.names if vocab.agent_level(nm)]
+        fp = torch.stack([self[nm].expand(b, n, n).reshape(-1) for nm in pair]).float().contiguous()
+        fa = (torch.stack([self[nm].reshape(-1) for nm in agent]).float().contiguous() if agent
+              else torch.zeros(0, b * n))
+        for k, nm in enumerate(pair):
+            self._cache[nm] = fp[k].view(b, n, n)
+        for k, nm in enumerate(agent):
+            self._cache[nm] = fa[k].view(b, n, 1)
+        return pair, agent, fp.numpy(), fa.numpy()
+
+
+VectorFn = Callable[["FeatureView"], "Tensor"]
+"""(view) -> (B, N, 2) one of the agent's own state vectors, or (B, N, N, 2) the observation of the other agent"""
+
+
+def _parts(vec: VectorFn, agent_level: bool) -> dict[str, FeatureFn]:
+    """x, y, norm, angle of one 2-D vector; agent features get a trailing axis of 1 (they broadcast over j)."""
+    post = (lambda t: t.unsqueeze(-1)) if agent_level else (lambda t: t)
+    return {
+        "x": lambda v: post(vec(v)[..., 0]),
+        "y": lambda v: post(vec(v)[..., 1]),
+        "d": lambda v: post(vec(v).norm(dim=-1)),
+        "theta": lambda v: post(torch.atan2(vec(v)[..., 1], vec(v)[..., 0])),
+    }
+
+
+def vector_map(state: Sequence[tuple[str, str, VectorFn]], version: str, unit: str = "world units",
+               observation: VectorFn | None = None,
+               extra: Sequence[tuple[Feature, FeatureFn]] = ()) -> FeatureMap:
+    """The feature map of a task whose state is 2-D vectors: ``state`` lists (prefix, owner phrase, vector fn) of
+    the asking agent (e.g. ('g', 'my goal', goal vector)); the observation of the other agent is o_ij's first two
+    columns (``observation`` overrides). Names: <prefix>x, <prefix>y, <prefix>d, <prefix>theta; dx, dy, d, theta;
+    and in v2 <first prefix>x_dx, ..._dy, <first prefix>y_dx, ..._dy. ``extra``: more (declaration, function)
+    pairs, after those."""
+    if version not in VERSIONS:
+        raise ConfigError(f"features must be one of {', '.join(VERSIONS)}, got {version!r}")
+    obs = observation or (lambda v: v.rel[..., :2])
+    feats: list[Feature] = []
+    fns: dict[str, FeatureFn] = {}
+    first: list[Feature] = []
+    for prefix, owner, vec in state:
+        fs = vector_features(prefix, "self", owner, unit)
+        first = first or fs
+        feats += fs
+        fns.update({f"{prefix}{part}": fn for part, fn in _parts(vec, True).items()})
+    other = vector_features("", "other", "", unit)
+    feats += other
+    fns.update(dict(zip(("dx", "dy", "d", "theta"), _parts(obs, False).values())))
+    if version == "v2" and first:
+        prods = product_features(first, other)
+        feats += prods
+        for p in prods:
+            a, o = p.name.split("_")
+            fns[p.name] = lambda v, a=a, o=o: v[a] * v[o]
+    for f, fn in extra:
+        feats.append(f)
+        fns[f.name] = fn
+    return FeatureMap(FeatureSet(tuple(feats)), fns, version)
+
+
+def custom_map(features: Sequence[tuple[Feature, FeatureFn]], version: str = "v1") -> FeatureMap:
+    """A feature map from (declaration, function) pairs, for tasks whose features are not 2-D vectors."""
+    return FeatureMap(FeatureSet(tuple(f for f, _ in features)), {f.name: fn for f, fn in features}, version)
+

@@ -1,0 +1,293 @@
+"""Tasks by import path: a task YAML names its class (``_target_``, Hydra's convention), the class names its schema
+(``Config``), and every process (the console script, joblib and submitit workers, process pools, a notebook)
+resolves the same class the same way. Nothing is registered at run time, so nothing is lost in a worker.
+
+Where task YAMLs are found (``task_yamls``): the package's conf/task/, the user's ``--config-dir`` and
+``hydra.searchpath`` directories (their task/ folders), and installed packages' entry points in the group
+``neurosym.tasks`` (``name = "package.module:Class"``). Stdlib and omegaconf only: the schema of the paper's tasks
+is read without importing torch (their modules import it lazily).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import importlib
+import inspect
+import os
+import sys
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..config import TaskConfig
+from ..errors import ConfigError
+from .base import DIMENSIONS, REQUIRED
+
+ENTRY_POINTS = "neurosym.tasks"
+"""entry-point group of installed task packages: name -> 'package.module:Class'"""
+
+
+def import_target(target: str) -> Any:
+    """The object at ``package.module.Class`` (or ``package.module:Class``); a one-line error when it does not
+    import, with the import error's message."""
+    if not isinstance(target, str) or not target.strip():
+        raise ConfigError("task._target_ is missing: a task YAML names its class, e.g. "
+                          "`_target_: mypackage.tasks.RingTask` (docs/extending.md)")
+    module, sep, attr = target.partition(":")
+    if not sep:
+        module, _, attr = target.rpartition(".")
+    if not module or not attr:
+        raise ConfigError(f"task._target_={target!r} is not an import path like package.module.Class")
+    try:
+        mod = importlib.import_module(module)
+    except Exception as e:  # ImportError, or the user's module failing while it imports
+        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise ConfigError(f"task._target_={target!r}: cannot import {module!r} ({type(e).__name__}: {msg}); "
+                          f"is it on the Python path (the working directory, or an installed package)?") from None
+    if not hasattr(mod, attr):
+        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}")
+    return getattr(mod, attr)
+
+
+def task_class(target: str) -> type:
+    """The task class of an import path, checked against the protocol (tasks/base.py ``Task``): its methods and a
+    ``Config`` schema extending TaskConfig. A class that does not satisfy it is one line naming what is missing."""
+    cls = import_target(target)
+    if not inspect.isclass(cls):
+        raise ConfigError(f"task._target_={target!r} is not a class")
+    missing = [m for m in REQUIRED if not callable(getattr(cls, m, None))]
+    if missing:
+        raise ConfigError(f"task class {target} lacks {', '.join(f'{m}()' for m in missing)} of the task protocol "
+                          f"(docs/extending.md)")
+    schema = getattr(cls, "Config", None)
+    if not (inspect.isclass(schema) and dataclasses.is_dataclass(schema) and issubclass(schema, TaskConfig)):
+        raise ConfigError(f"task class {target} needs `Config`, a dataclass schema extending "
+                          f"neurosym_cli.config.TaskConfig (docs/extending.md)")
+    return cls
+
+
+def schema_of(target: str) -> type[TaskConfig]:
+    return task_class(target).Config
+
+
+def closest(key: str, known: Iterable[str]) -> str:
+    """'; did you mean 'x'?' for the nearest known key, or ''."""
+    near = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
+    return f"; did you mean {near[0]!r}?" if near else ""
+
+
+def typed_task(node: Any) -> Any:
+    """A composed task node (a DictConfig from the task's YAML and overrides) merged into its class's schema: a
+    structured node with every field and default, type-checked. Unknown keys and wrong types are one line."""
+    from omegaconf import OmegaConf
+    from omegaconf.errors import OmegaConfBaseException
+
+    target = node.get("_target_") if hasattr(node, "get") else None
+    schema = schema_of(target)  # type: ignore[arg-type]
+    fields = {f.name for f in dataclasses.fields(schema)}
+    for key in node.keys():
+        if key not in fields:
+            raise ConfigError(f"unknown key 'task.{key}' for task {node.get('name', '?')} ({schema.__name__})"
+                              f"{closest(str(key), fields)}")
+    try:
+        typed = OmegaConf.merge(OmegaConf.structured(schema), node)
+    except OmegaConfBaseException as e:
+        raise ConfigError(f"task: {str(e).splitlines()[0]}") from None
+    return typed
+
+
+def make_task(cfg: TaskConfig, horizon: int | None = None) -> Any:
+    """The task of a typed task config; ``horizon`` overrides its T. Its dimensions are checked once here."""
+    cls = task_class(cfg._target_)
+    task = cls(cfg, horizon)
+    bad = [d for d in DIMENSIONS if not isinstance(getattr(task, d, None), int) or getattr(task, d) < 1]
+    if bad:
+        raise ConfigError(f"task {cfg.name} ({cfg._target_}) must set positive integers {', '.join(bad)}")
+    return task
+
+
+def probe(task: Any, name: str) -> None:
+    """Reset two episodes and observe them: wrong shapes are one line naming the method and the shapes, before any
+    training starts."""
+    import torch
+
+    from .base import Rng, TaskState
+
+    gen = torch.Generator().manual_seed(0)
+    try:
+        buckets = task.reset(2, gen)
+    except Exception as e:
+        raise ConfigError(f"task {name}: reset(2, gen) failed ({type(e).__name__}: {str(e).splitlines()[0]})") \
+            from None
+    if not isinstance(buckets, list) or not buckets or not all(isinstance(b, TaskState) for b in buckets):
+        raise ConfigError(f"task {name}: reset() must return a non-empty list of TaskState buckets, got "
+                          f"{type(buckets).__name__}")
+    s = buckets[0]
+    if s.pos.dim() != 3 or s.pos.shape[-1] != 2:
+        raise ConfigError(f"task {name}: state.pos must be (B, N, 2), got {tuple(s.pos.shape)}")
+    obs = task.observe(s, Rng(gen))
+    b, n = s.batch, s.n_agents
+    want = {"agent": (b, n, task.obs_dim), "rel": (b, n, n, task.pair_dim)}
+    for field, shape in want.items():
+        got = tuple(getattr(obs, field).shape)
+        if got != shape:
+            raise ConfigError(f"task {name}: observe() gives {field} of shape {got}, but obs_dim/pair_dim declare "
+                              f"{shape}")
+
+
+# ------------------------------------------------------------------------------ where task YAMLs are found
+def _installed_conf() -> Path | None:
+    from importlib.util import find_spec
+
+    spec = find_spec("neurosym_cli.conf")
+    return Path(spec.origin).parent if spec and spec.origin else None
+
+
+def search_dirs(args: list[str]) -> list[Path]:
+    """Config directories a command line adds: ``--config-dir DIR`` / ``-cd DIR`` / ``--config-dir=DIR`` and
+    ``hydra.searchpath=[file://DIR, pkg://package.conf, ...]``."""
+    out: list[Path] = []
+    for i, a in enumerate(args):
+        if a in ("--config-dir", "-cd") and i + 1 < len(args):
+            out.append(Path(args[i + 1]))
+        elif a.startswith(("--config-dir=", "-cd=")):
+            out.append(Path(a.split("=", 1)[1]))
+        elif a.lstrip("+").startswith("hydra.searchpath="):
+            for item in a.split("=", 1)[1].strip("[]").split(","):
+                item = item.strip().strip("'\"")
+                if item.startswith("file://"):
+                    out.append(Path(item[len("file://"):]))
+                elif item.startswith("pkg://"):
+                    from importlib.util import find_spec
+
+                    try:
+                        spec = find_spec(item[len("pkg://"):])
+                    except (ImportError, ValueError):
+                        spec = None
+                    if spec and spec.submodule_search_locations:
+                        out.append(Path(list(spec.submodule_search_locations)[0]))
+                elif item:
+                    out.append(Path(item))
+    return [p.expanduser().absolute() for p in out]
+
+
+def entry_point_tasks() -> dict[str, str]:
+    """Installed packages' tasks: entry-point name -> import path of the class."""
+    from importlib.metadata import entry_points
+
+    try:
+        return {ep.name: ep.value for ep in entry_points(group=ENTRY_POINTS)}
+    except Exception:  # a broken distribution's metadata must not break the CLI
+        return {}
+
+
+def task_yamls(args: list[str] | None = None) -> dict[str, Path]:
+    """Task name (YAML stem) -> its file, the user's directories last (Hydra's search path: later wins)."""
+    out: dict[str, Path] = {}
+    dirs = [d for d in [_installed_conf()] if d is not None] + search_dirs(args or [])
+    for d in dirs:
+        for f in sorted((d / "task").glob("*.yaml")):
+            out[f.stem] = f
+    return out
+
+
+def task_choices(args: list[str] | None = None) -> list[str]:
+    """Every task a command line can name: YAMLs of the search path and installed entry points."""
+    return sorted(set(task_yamls(args)) | set(entry_point_tasks()))
+
+
+def yaml_target(name: str, args: list[str] | None = None, _seen: tuple = ()) -> str | None:
+    """The ``_target_`` a task YAML resolves to (following its defaults list within the task group), or the entry
+    point's; None when it names none."""
+    files = task_yamls(args)
+    if name not in files:
+        return entry_point_tasks().get(name)
+    from omegaconf import OmegaConf
+
+    try:
+        node = OmegaConf.to_container(OmegaConf.load(files[name]))
+    except Exception:
+        return None
+    if not isinstance(node, dict):
+        return None
+    if node.get("_target_"):
+        return str(node["_target_"])
+    for d in node.get("defaults") or []:
+        if isinstance(d, str) and d not in ("_self_",) and d not in _seen and "/" not in d:
+            t = yaml_target(d, args, _seen + (name,))
+            if t:
+                return t
+    return None
+
+
+def import_paths(args: list[str]) -> list[str]:
+    """Directories a user's task module is imported from: the working directory and the parent of each config
+    directory the command line adds (``examples/ring/conf`` -> ``examples/ring``)."""
+    out = [os.getcwd()]
+    for d in search_dirs(args):
+        out += [str(d), str(d.parent)]
+    return list(dict.fromkeys(out))
+
+
+def add_import_paths(paths: list[str]) -> None:
+    """Put ``paths`` on this process's sys.path and on PYTHONPATH, so workers (joblib, process pools, submitit)
+    import the user's task module the same way."""
+    for p in reversed(paths):
+        if p not in sys.path:
+            sys.path.insert(0, p)
+    old = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    os.environ["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + old))
+
+
+# ------------------------------------------------------------------ the command line's tasks and their keys
+def task_names(args: list[str], config_name: str) -> list[str]:
+    """The tasks a command line runs: its ``task=`` values (a sweep lists several), else the default of the
+    command's primary config (conf/<config_name>.yaml)."""
+    for a in args:
+        key, sep, value = a.partition("=")
+        if sep and key.lstrip("+") == "task":
+            return [v for v in value.split(",") if v]
+    return [_default_task(config_name)]
+
+
+def _default_task(config_name: str) -> str:
+    """The ``task:`` entry of a primary config's defaults list (random-cross for every verb today)."""
+    from importlib.util import find_spec
+
+    from omegaconf import OmegaConf
+
+    spec = find_spec("neurosym_cli.conf")
+    if spec is None or spec.origin is None:
+        return "random-cross"
+    from pathlib import Path
+
+    node = OmegaConf.to_container(OmegaConf.load(Path(spec.origin).parent / f"{config_name}.yaml"))
+    for d in node.get("defaults", []) if isinstance(node, dict) else []:
+        if isinstance(d, dict) and "task" in d:
+            return str(d["task"])
+    return "random-cross"
+
+
+def task_schemas(args: list[str], config_name: str) -> list[type]:
+    """The schemas of the tasks a command line runs (resolved through their YAMLs' ``_target_``): a class that
+    does not import or breaks the protocol is a ConfigError (one line) here, before Hydra runs. A task without a
+    YAML is left to the choices check."""
+    out = []
+    for name in task_names(args, config_name):
+        target = yaml_target(name, args)
+        if target is not None:
+            out.append(schema_of(target))
+    return out
+
+
+def force_task_keys(args: list[str], schemas: list[type]) -> list[str]:
+    """``task.K=V`` as ``++task.K=V`` for every field K of the task's schema: a task YAML names only what it changes,
+    so Hydra (which composes the task node untyped) would refuse a schema field the YAML leaves out."""
+    fields = {f.name for s in schemas for f in dataclasses.fields(s)}
+    out = []
+    for a in args:
+        key, sep, value = a.partition("=")
+        if sep and key.startswith("task.") and key[len("task."):] in fields:
+            a = f"++{key}={value}"
+        out.append(a)
+    return out
