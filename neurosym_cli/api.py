@@ -51,6 +51,7 @@ def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None 
     from hydra import initialize_config_module
 
     from .commands import COMMANDS as VERBS
+    from .commands import apps  # noqa: F401  (registers the baseline group and installed tasks in Hydra's store)
     from .commands._run import typed_config
     from .errors import UserError
     from .overrides import check
