@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
-from neurosym_cli.stages.select import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
+from neurosym_cli.stats import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
