@@ -180,15 +180,25 @@ def normalized_score(loss: float, tf_full: float, no_comm: float) -> float:
     return (no_comm - loss) / gap
 
 
-def performance_profile(scores: np.ndarray | Sequence[float], taus: Sequence[float], reps: int = PROFILE_REPS,
-                        seed: int = 0, size: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def performance_profile(scores: np.ndarray | Sequence[Sequence[float]], taus: Sequence[float],
+                        reps: int = PROFILE_REPS, seed: int = 0,
+                        size: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """rliable's score distribution (create_performance_profile, use_score_distribution=True): for each tau the
-    fraction of all runs and tasks whose (higher-is-better) score exceeds tau; with its stratified bootstrap
-    percentile band. Returns (profile, lower, upper), each of len(taus)."""
-    a = _as_matrix(scores)
+    fraction of all runs and tasks whose (higher-is-better) score exceeds tau, with its stratified bootstrap
+    percentile band. ``scores``: (runs, tasks), or one sequence of runs per task when tasks have different run
+    counts (each task's runs are resampled within it). Returns (profile, lower, upper), each of len(taus)."""
+    if isinstance(scores, np.ndarray) and scores.ndim == 2:
+        cols = [scores[:, j] for j in range(scores.shape[1])]
+    else:
+        cols = [np.asarray(c, dtype=float).ravel() for c in scores]
+    cols = [c for c in cols if c.size]
+    if not cols:
+        raise ValueError("a performance profile of no runs")
     t = np.asarray(taus, dtype=float)
-    prof = (a.ravel()[:, None] > t).mean(axis=0)
-    boot = stratified_resamples(a, reps, np.random.default_rng(seed)).reshape(reps, -1)
+    flat = np.concatenate(cols)
+    prof = (flat[:, None] > t).mean(axis=0)
+    rng = np.random.default_rng(seed)
+    boot = np.concatenate([c[rng.integers(0, c.size, size=(reps, c.size))] for c in cols], axis=1)
     dist = (boot[:, :, None] > t).mean(axis=1)  # (reps, taus)
     lo, hi = np.quantile(dist, [(1 - size) / 2, (1 + size) / 2], axis=0)
     return prof, lo, hi
