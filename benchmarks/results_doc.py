@@ -4,6 +4,7 @@
     python benchmarks/results_doc.py             # docs/results/*.json + the template -> docs/results.md
     python benchmarks/results_doc.py --check     # exit 1 when docs/results.md is not what the files give
     python benchmarks/results_doc.py --figures   # also redraw the Figure-2 pictures from the result files
+    python benchmarks/results_doc.py --seeds DIR --out /tmp/page.md --seed-figures /tmp/figs   # preview other seeds
 
 Every number of the document comes from the result files: one per variant of the protocol (a task, with the
 lambda and objective of its programs), holding each baseline's summary (mean and std over the evaluation seeds),
@@ -24,6 +25,11 @@ functions below (never evaluated as code):
     {{noisy T C}}            appendix E: link-failure task T (T.json, select-T.json) against its clean task C
     {{selection T}}          `neurosym select` on task T: the ranked table, the pick, its test numbers, the
                              paper's claims re-checked with it, the loss-degree Pareto front (select-T.json)
+    {{seeds}}                every task over its training seeds (docs/results/seeds/*.json): mean ± t-interval
+                             and IQM [bootstrap] per baseline, probability of improvement, claims per seed and
+                             across seeds ("holds on k/n"), the loss-degree figure; "not yet run" without files
+    {{seeds_glance}}         the claims at a glance over training seeds: cells "holds on k/n; mean ± t-interval"
+    {{seeds_planned}}        the training seeds the protocol runs (0, 1, 2)
 
 Loss claims use paired differences over the evaluation seeds (every baseline sees the same episodes for a seed)
 with a 95 % t-interval.
@@ -37,12 +43,13 @@ import json
 import re
 import sys
 from pathlib import Path
+from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
-from neurosym_cli.stages.select import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
+from neurosym_cli.stats import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
 
 
 @functools.lru_cache(maxsize=None)
@@ -451,8 +458,8 @@ def selection(task: str, variants: dict[str, dict]) -> str:
             out.append(f"| {b} | {ms(v, b, 'cost')} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
                        f"{ms(v, b, 'mean_degree')} |")
     out += ["", "The paper's claims with the selected program (prog, prog-retrained replaced by the pick):", ""]
-    before = {short: ok for short, _, _, ok in claims(task, v)}
-    for short, long, _, ok in claims(task, vs):
+    before = {c.short: c.holds for c in claims(task, v)}
+    for short, long, _, ok, *_ in claims(task, vs):
         if "det-prog" in short:  # its programs were searched with the default lambda and features, not the pick's
             out.append(f"- {short}: not re-checked (det-prog was not searched with the picked lambda and features)")
             continue
@@ -527,66 +534,93 @@ def verdict(ok: bool) -> str:
     return "**supported**" if ok else "**not supported**"
 
 
-def claims(task: str, v: dict) -> list[tuple[str, str, str, bool]]:
-    """(short claim, long line, glance cell, holds) for each claim of the paper on this task."""
+class Claim(NamedTuple):
+    """One claim of the paper checked on one set of numbers: its short and long lines, its glance cell, whether it
+    holds, its name (the short line without numbers: the same on every seed), and the quantity the verdict reads
+    (``value``, described by ``unit``)."""
+
+    short: str
+    long: str
+    cell: str
+    holds: bool
+    name: str
+    value: float
+    unit: str
+
+
+def claims(task: str, v: dict) -> list[Claim]:
+    """Each claim of the paper on this task, checked on the numbers of ``v`` (one training seed)."""
     pr = "prog-retrained"
     out = []
     if task in FORMATION:
         g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
-        out.append(("prog-retrained loss close to tf-full (within 5 %)",
-                    f"prog-retrained loss close to tf-full (within 5%): {mean(v, pr):.2f} vs {mean(v, 'tf-full'):.2f}, "
-                    f"{g:+.1f}% (paired difference {d[0]:+.2f} ± {d[1]:.2f})", f"{g:+.1f} %".replace("-", "−"),
-                    abs(g) <= 5))
+        out.append(Claim("prog-retrained loss close to tf-full (within 5 %)",
+                         f"prog-retrained loss close to tf-full (within 5%): {mean(v, pr):.2f} vs "
+                         f"{mean(v, 'tf-full'):.2f}, {g:+.1f}% (paired difference {d[0]:+.2f} ± {d[1]:.2f})",
+                         f"{g:+.1f} %".replace("-", "−"), abs(g) <= 5, "prog-retrained loss close to tf-full (within 5 %)", g,
+                         "% loss gap to tf-full"))
         d = paired(v, pr, "dist")
         ok = d[0] + d[1] < 0
-        out.append(("prog-retrained better than dist",
-                    f"prog-retrained better than dist: {mean(v, pr):.2f} vs {mean(v, 'dist'):.2f} (paired difference "
-                    f"{d[0]:+.2f} ± {d[1]:.2f})" + ("" if ok else (" (lower on average, not significant)" if d[0] < 0
-                                                                     else "")),
-                    pm(d) + ("" if ok else ", not significant" if d[0] < 0 else ""), ok))
-        ok = mean(v, pr, "max_out") < mean(v, "hard-attn", "max_out")
-        out.append(("prog-retrained max out-degree lower than hard-attn",
-                    f"prog-retrained max out-degree lower than hard-attn: {ms(v, pr, 'max_out')} vs "
-                    f"{ms(v, 'hard-attn', 'max_out')}",
-                    f"{mean(v, pr, 'max_out'):.1f} vs {mean(v, 'hard-attn', 'max_out'):.1f}", ok))
+        out.append(Claim("prog-retrained better than dist",
+                         f"prog-retrained better than dist: {mean(v, pr):.2f} vs {mean(v, 'dist'):.2f} (paired "
+                         f"difference {d[0]:+.2f} ± {d[1]:.2f})"
+                         + ("" if ok else (" (lower on average, not significant)" if d[0] < 0 else "")),
+                         pm(d) + ("" if ok else ", not significant" if d[0] < 0 else ""), ok, "prog-retrained better than dist",
+                         d[0], "loss difference to dist"))
+        dv = mean(v, pr, "max_out") - mean(v, "hard-attn", "max_out")
+        out.append(Claim("prog-retrained max out-degree lower than hard-attn",
+                         f"prog-retrained max out-degree lower than hard-attn: {ms(v, pr, 'max_out')} vs "
+                         f"{ms(v, 'hard-attn', 'max_out')}",
+                         f"{mean(v, pr, 'max_out'):.1f} vs {mean(v, 'hard-attn', 'max_out'):.1f}", dv < 0,
+                         "prog-retrained max out-degree lower than hard-attn", dv, "max out-degree difference to hard-attn"))
         d = paired(v, "prog", pr)
         ok = d[0] - d[1] > 0
-        out.append(("retraining is needed (prog worse than prog-retrained)",
-                    f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.2f} vs "
-                    f"{mean(v, pr):.2f} (paired difference {d[0]:+.2f} ± {d[1]:.2f})"
-                    + ("" if ok else (" (worse on average, not significant)" if d[0] > 0 else "")),
-                    f"{mean(v, 'prog'):.1f} vs {mean(v, pr):.1f}", ok))
-        ok = mean(v, "det-prog-retrained", "max_out") > mean(v, pr, "max_out")
-        out.append(("det-prog-retrained has a worse max out-degree",
-                    f"det-prog-retrained has a worse max out-degree than prog-retrained: "
-                    f"{ms(v, 'det-prog-retrained', 'max_out')} vs {ms(v, pr, 'max_out')}",
-                    f"{mean(v, 'det-prog-retrained', 'max_out'):.2f} vs {mean(v, pr, 'max_out'):.2f}", ok))
-        ok = mean(v, "dt", "max_in") > mean(v, pr, "max_in") or mean(v, "dt", "max_out") > mean(v, pr, "max_out")
-        out.append(("dt has poor degrees",
-                    f"dt has poor degrees: max in {ms(v, 'dt', 'max_in')}, max out {ms(v, 'dt', 'max_out')} vs "
-                    f"prog-retrained {ms(v, pr, 'max_in')}, {ms(v, pr, 'max_out')}",
-                    f"in {mean(v, 'dt', 'max_in'):.1f} / out {mean(v, 'dt', 'max_out'):.1f} vs "
-                    f"{mean(v, pr, 'max_in'):.1f} / {mean(v, pr, 'max_out'):.1f}", ok))
+        out.append(Claim("retraining is needed (prog worse than prog-retrained)",
+                         f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.2f} vs "
+                         f"{mean(v, pr):.2f} (paired difference {d[0]:+.2f} ± {d[1]:.2f})"
+                         + ("" if ok else (" (worse on average, not significant)" if d[0] > 0 else "")),
+                         f"{mean(v, 'prog'):.1f} vs {mean(v, pr):.1f}", ok, "retraining is needed (prog worse than prog-retrained)", d[0],
+                         "loss of prog minus prog-retrained"))
+        dv = mean(v, "det-prog-retrained", "max_out") - mean(v, pr, "max_out")
+        out.append(Claim("det-prog-retrained has a worse max out-degree",
+                         f"det-prog-retrained has a worse max out-degree than prog-retrained: "
+                         f"{ms(v, 'det-prog-retrained', 'max_out')} vs {ms(v, pr, 'max_out')}",
+                         f"{mean(v, 'det-prog-retrained', 'max_out'):.2f} vs {mean(v, pr, 'max_out'):.2f}", dv > 0,
+                         "det-prog-retrained has a worse max out-degree", dv, "max out-degree difference det-prog-retrained minus "
+                         "prog-retrained"))
+        dv = max(mean(v, "dt", "max_in") - mean(v, pr, "max_in"), mean(v, "dt", "max_out") - mean(v, pr, "max_out"))
+        out.append(Claim("dt has poor degrees",
+                         f"dt has poor degrees: max in {ms(v, 'dt', 'max_in')}, max out {ms(v, 'dt', 'max_out')} vs "
+                         f"prog-retrained {ms(v, pr, 'max_in')}, {ms(v, pr, 'max_out')}",
+                         f"in {mean(v, 'dt', 'max_in'):.1f} / out {mean(v, 'dt', 'max_out'):.1f} vs "
+                         f"{mean(v, pr, 'max_in'):.1f} / {mean(v, pr, 'max_out'):.1f}", dv > 0, "dt has poor degrees", dv,
+                         "larger of dt's max in- and out-degree excess over prog-retrained"))
         return out
-    ok = mean(v, pr) < 0.9 * 4.13
-    out.append(("prog-retrained well below 4.13 uncovered goals",
-                f"prog-retrained well below 4.13 uncovered goals (the paper's no-communication loss): "
-                f"{ms(v, pr, 'cost', 3)}", f"{mean(v, pr):.2f}", ok))
+    m = mean(v, pr)
+    out.append(Claim("prog-retrained well below 4.13 uncovered goals",
+                     f"prog-retrained well below 4.13 uncovered goals (the paper's no-communication loss): "
+                     f"{ms(v, pr, 'cost', 3)}", f"{m:.2f}", m < 0.9 * 4.13, "prog-retrained well below 4.13 uncovered goals", m,
+                     "prog-retrained loss (uncovered goals)"))
     d = paired(v, pr, "no-comm")
     ok = d[0] + d[1] < 0
-    out.append((f"... and below our own no-comm ({mean(v, 'no-comm'):.2f})",
-                f"... and below our own no-comm model ({ms(v, 'no-comm', 'cost', 3)}; paired difference "
-                f"{d[0]:+.3f} ± {d[1]:.3f})", pm(d) + ("" if ok else ", not significant"), ok))
+    out.append(Claim(f"... and below our own no-comm ({mean(v, 'no-comm'):.2f})",
+                     f"... and below our own no-comm model ({ms(v, 'no-comm', 'cost', 3)}; paired difference "
+                     f"{d[0]:+.3f} ± {d[1]:.3f})", pm(d) + ("" if ok else ", not significant"), ok,
+                     "... and below our own no-comm",
+                     d[0], "loss difference to no-comm"))
     g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
-    out.append((f"prog-retrained close to tf-full ({mean(v, 'tf-full'):.2f}, within 10 %)",
-                f"prog-retrained close to tf-full (within 10%): {mean(v, pr):.3f} vs {mean(v, 'tf-full'):.3f}, "
-                f"{g:+.1f}% (paired difference {d[0]:+.3f} ± {d[1]:.3f})",
-                f"{g:+.1f} % ({pm(d, 3)})".replace("-", "−"), abs(g) <= 10))
-    ok = mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
-    out.append(("prog-retrained has a smaller max degree than tf-full",
-                f"prog-retrained has a smaller max degree than tf-full: {ms(v, pr, 'max_degree')} vs "
-                f"{ms(v, 'tf-full', 'max_degree')}",
-                f"{mean(v, pr, 'max_degree'):.1f} vs {mean(v, 'tf-full', 'max_degree'):.0f}", ok))
+    out.append(Claim(f"prog-retrained close to tf-full ({mean(v, 'tf-full'):.2f}, within 10 %)",
+                     f"prog-retrained close to tf-full (within 10%): {mean(v, pr):.3f} vs {mean(v, 'tf-full'):.3f}, "
+                     f"{g:+.1f}% (paired difference {d[0]:+.3f} ± {d[1]:.3f})",
+                     f"{g:+.1f} % ({pm(d, 3)})".replace("-", "−"), abs(g) <= 10,
+                     "prog-retrained close to tf-full (within 10 %)", g,
+                     "% loss gap to tf-full"))
+    dv = mean(v, pr, "max_degree") - mean(v, "tf-full", "max_degree")
+    out.append(Claim("prog-retrained has a smaller max degree than tf-full",
+                     f"prog-retrained has a smaller max degree than tf-full: {ms(v, pr, 'max_degree')} vs "
+                     f"{ms(v, 'tf-full', 'max_degree')}",
+                     f"{mean(v, pr, 'max_degree'):.1f} vs {mean(v, 'tf-full', 'max_degree'):.0f}", dv < 0,
+                     "prog-retrained has a smaller max degree than tf-full", dv, "max degree difference to tf-full"))
     return out
 
 
@@ -623,7 +657,7 @@ def section(name: str, v: dict) -> str:
         out += ["Wall time per stage (one CPU thread each, two stages at a time on the 2 cores):", "",
                 "| stage | seconds |", "|---|---|"] + [f"| {k} | {s:.0f} |" for k, s in t.items()]
         out += [f"| **total** | **{total:.0f}** ({total / 60:.1f} min) |", ""]
-    out += ["Claims of the paper:", ""] + [f"- {long} -> {verdict(ok)}" for _, long, _, ok in claims(task, v)]
+    out += ["Claims of the paper:", ""] + [f"- {c.long} -> {verdict(c.holds)}" for c in claims(task, v)]
     return "\n".join(out) + "\n"
 
 
@@ -645,7 +679,206 @@ def glance(variants: dict[str, dict]) -> str:
     return "\n".join(out)
 
 
-def render(template: str, variants: dict[str, dict], run: dict) -> str:
+# ------------------------------------------------------------------------------------------ training seeds
+SEEDS = RESULTS / "seeds"
+SEED_TASKS = ("random-cross", "random-grid", "unlabeled-goals")
+PLANNED_SEEDS = (0, 1, 2)
+"""the training seeds the protocol runs per task (benchmarks/run_seeds.py)"""
+
+
+def load_seeds(directory: Path = SEEDS) -> dict:
+    """The seed files of ``directory`` grouped by task (neurosym_cli.seeds.SeedRun, seed order); {} when none."""
+    from neurosym_cli import seeds
+
+    return seeds.from_seed_files(sorted(Path(directory).glob("*.json"))) if Path(directory).is_dir() else {}
+
+
+def seed_variant(r) -> dict:
+    """One training seed in the variant format that ``claims`` reads (summaries recomputed from the per-seed
+    rows)."""
+    base = {}
+    for b, e in r.entries.items():
+        summary = {}
+        for k in METRICS:
+            xs = [row[k] for row in e.rows]
+            m = sum(xs) / len(xs)
+            sd = (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5 if len(xs) > 1 else 0.0
+            summary[k] = {"mean": m, "std": sd}
+        base[b] = {"label": e.label, "summary": summary,
+                   "cost_per_seed": {str(row["seed"]): row["cost"] for row in e.rows}}
+    return {"task": r.task, "baselines": base, "seeds": len(next(iter(r.entries.values())).rows),
+            **(r.pick or {})}
+
+
+def seed_claims(task: str, runs: list) -> tuple[list[str], dict[int, list[Claim] | str]]:
+    """Per training seed its claims (or why none: a baseline missing); and the claim names in order."""
+    per: dict[int, list[Claim] | str] = {}
+    names: list[str] = []
+    for r in runs:
+        try:
+            per[r.seed] = claims(task, seed_variant(r))
+            names = names or [c.name for c in per[r.seed]]
+        except KeyError as e:
+            per[r.seed] = f"not checked: {e.args[0]} not evaluated"
+    return names, per
+
+
+def claim_over_seeds(name: str, per: dict, digits: int) -> dict:
+    """A claim across seeds: how many seeds it holds on, of how many checked, and its quantity's mean with the
+    95 % t half-width across seeds (None for one seed)."""
+    cs = [next(c for c in cl if c.name == name) for cl in per.values() if not isinstance(cl, str)]
+    k, n = sum(c.holds for c in cs), len(cs)
+    m, h = mean_ci([c.value for c in cs]) if cs else (None, None)
+    unit = cs[0].unit if cs else ""
+    pct = " %" if unit.startswith("%") else ""
+    sign = "" if unit.startswith("prog-retrained loss") else "+"  # a loss itself, not a difference: unsigned
+    if not cs:
+        across = "-"
+    elif n == 1:
+        across = f"{m:{sign}.{digits}f}{pct} (one seed: no interval)"
+    else:
+        across = f"{m:{sign}.{digits}f} ± {h:.{digits}f}{pct}"
+    return {"k": k, "n": n, "across": across.replace("-", "−") if cs else across, "unit": unit, "short": name}
+
+
+def holds_cell(c: dict) -> str:
+    """'holds on k/n' (bold when on every seed: the claim holds)."""
+    if c["n"] == 0:
+        return "not checked"
+    text = f"holds on {c['k']}/{c['n']}"
+    return f"**{text}**" if c["k"] == c["n"] else text
+
+
+def _seed_table(task: str, runs: list) -> list[str]:
+    from neurosym_cli import seeds
+
+    s = seeds.summarize(runs)
+    n = len(s.seeds)
+    digits = 3 if task == "unlabeled-goals" else 2
+    ev = next(iter(runs[0].entries.values())).rows
+    if n == 1:
+        head = (f"One training seed: its model's mean over the {len(ev)} evaluation seeds ± the 95 % Student-t "
+                "interval over those evaluation seeds (episode noise of one trained model); no interval across one "
+                "training seed, no IQM.")
+    else:
+        head = (f"Each training seed contributes one number per baseline, its model's mean over the {len(ev)} "
+                f"evaluation seeds. Loss and degrees: mean ± 95 % Student-t interval across the {n} training seeds "
+                f"({n - 1} degree{'s' if n > 2 else ''} of freedom); loss IQM [95 % stratified bootstrap percentile "
+                "interval] (rliable; with fewer than 4 seeds the IQM is the mean).")
+
+    def cell(m: dict) -> str:
+        if m["n"] == 1 and n == 1:
+            return f"{m['mean']:.{digits}f} ± {m['eval_ci95']:.{digits}f}"
+        return seeds.fmt_mean(m, digits)
+
+    out = [head, "", "| baseline | n seeds | loss | loss IQM [95 % bootstrap] | max in-degree | max out-degree | "
+           "max degree |", "|---|---|---|---|---|---|---|"]
+    for key, m in s.rows.items():
+        out.append(f"| {key} | {m['cost']['n']} | {cell(m['cost'])} | {seeds.fmt_iqm(m['cost'], digits)} | "
+                   f"{cell(m['max_in'])} | {cell(m['max_out'])} | {cell(m['max_degree'])} |")
+    if s.improvement and n > 1:
+        out += ["", "Probability that prog-retrained improves on each baseline's loss across training seeds (the "
+                "share of seed pairs where its loss is lower, ties counting 1/2; [95 % stratified bootstrap "
+                "percentile interval]; 0.5 = no difference):", "",
+                "| prog-retrained vs | P(improves) | seeds |", "|---|---|---|"]
+        out += [f"| {r['y']} | {seeds.fmt_p(r)} | {r['n_x']} / {r['n_y']} |" for r in s.improvement]
+    return out
+
+
+def seeds_task(task: str, runs: list) -> str:
+    """One task over training seeds: the seeds run and their picks, the across-seed table, the probability of
+    improvement, the claims per seed and across seeds, the loss-degree figure when drawn."""
+    out = [f"### {task} over training seeds", ""]
+    if not runs:
+        return "\n".join(out + [f"Not yet run: no seed file `docs/results/seeds/{task}-seed<S>.json` (training seeds "
+                                 f"{', '.join(map(str, PLANNED_SEEDS))} are planned; benchmarks/run_seeds.py)."])
+    have = [r.seed for r in runs]
+    missing = [s for s in PLANNED_SEEDS if s not in have]
+    budget = runs[0].settings.get("budget")
+    picks = "; ".join(f"seed {r.seed} K = {r.pick['rules']}, λ {r.pick['lam']:g}, {r.pick['features']}"
+                      for r in runs if r.pick)
+    out += [f"Training seed{'s' if len(have) > 1 else ''} {', '.join(map(str, have))} ({len(have)} of "
+            f"{len(PLANNED_SEEDS)}" + (f"; seed{'s' if len(missing) > 1 else ''} {', '.join(map(str, missing))} not "
+                                      "yet run" if missing else "") + f"), {budget} budget: on each "
+            "seed `neurosym select` picked K, λ and the features by validation, then `neurosym pipeline "
+            f"selected=true` made and evaluated every baseline (pinned CPU kernels). Picks: {picks}.", ""]
+    out += _seed_table(task, runs)
+    names, per = seed_claims(task, runs)
+    digits = 3 if task == "unlabeled-goals" else 2
+    out += ["", "Claims of the paper per training seed (yes/no on that seed's evaluation seeds, as in the sections "
+            "above) and across seeds: \"holds on k/n\" (bold when on every seed: the claim holds), and the quantity "
+            "the verdict reads, mean ± 95 % Student-t interval across training seeds:", "",
+            "| claim | " + " | ".join(f"seed {s}" for s in have) + " | holds on | across seeds | quantity |",
+            "|---" * (len(have) + 4) + "|"]
+    for name in names:
+        c = claim_over_seeds(name, per, digits)
+        cells = []
+        for s in have:
+            cl = per[s]
+            if isinstance(cl, str):
+                cells.append(cl)
+                continue
+            one = next(x for x in cl if x.name == name)
+            cells.append(("yes, " if one.holds else "**no**: ") + one.cell)
+        out.append(f"| {c['short']} | " + " | ".join(cells) + f" | {holds_cell(c)} | {c['across']} | {c['unit']} |")
+    if (DOCS / "figures" / f"seeds-{task}.png").exists():
+        out += ["", f"![{task}: loss against max degree over training seeds, one marker per seed and the across-seed "
+                f"mean ± 95 % t-interval](figures/seeds-{task}.png)"]
+    return "\n".join(out)
+
+
+def seeds_section(by_task: dict) -> str:
+    """{{seeds}}: every task of SEED_TASKS over its training seeds, then the performance profile when drawn."""
+    parts = [seeds_task(t, by_task.get(t, [])) for t in SEED_TASKS]
+    if (DOCS / "figures" / "seeds-profile.png").exists():
+        parts.append("![performance profile of normalized loss over tasks and training seeds: 1 = the seed's "
+                     "tf-full, 0 = its no-comm](figures/seeds-profile.png)")
+    return "\n\n".join(parts)
+
+
+def seeds_glance(by_task: dict) -> str:
+    """{{seeds_glance}}: per task family a row per claim, a column per task, each cell "holds on k/n" with the
+    across-seed interval of the claim's quantity ("not yet run" where a task has no seed file)."""
+    out = []
+    for family, tasks in (("paper section 4", [t for t in SEED_TASKS if t in FORMATION]),
+                          ("unlabeled-goals", [t for t in SEED_TASKS if t not in FORMATION])):
+        digits = 3 if family == "unlabeled-goals" else 2
+        per_task = {t: seed_claims(t, by_task.get(t, [])) for t in tasks}
+        names = next((n for n, _ in per_task.values() if n), [])
+        out += [f"| claim ({family}) | " + " | ".join(
+            f"{t} ({len(by_task.get(t, []))} seed{'' if len(by_task.get(t, [])) == 1 else 's'})" for t in tasks)
+            + " |", "|---" * (len(tasks) + 1) + "|"]
+        if not names:
+            out += ["| every claim | " + " | ".join("not yet run" for _ in tasks) + " |", ""]
+            continue
+        for name in names:
+            cells, label = [], None
+            for t in tasks:
+                n_t, per = per_task[t]
+                if not by_task.get(t):
+                    cells.append("not yet run")
+                    continue
+                c = claim_over_seeds(name, per, digits)
+                label = label or c["short"]
+                cells.append(f"{holds_cell(c)}; {c['across']}")
+            out.append(f"| {label or name} | " + " | ".join(cells) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+def draw_seed_figures(by_task: dict, out_dir: Path = DOCS / "figures") -> None:
+    """seeds-<task>.png and seeds-profile.png from the seed files alone (neurosym_cli.seeds.draw)."""
+    from neurosym_cli import seeds
+
+    for f in seeds.draw({t: r for t, r in by_task.items() if r}, out_dir):
+        print(f"drew {f}")
+
+
+def render(template: str, variants: dict[str, dict], run: dict, seed_runs: dict | None = None) -> str:
+    """The page: every placeholder of ``template`` replaced (``seed_runs``: the seed files by task, read from
+    docs/results/seeds when None)."""
+    by_task = load_seeds() if seed_runs is None and "{{seeds" in template else (seed_runs or {})
+
     def fmt(x: float, digits: str) -> str:
         return f"{x:.{int(digits)}f}".replace("-", "−")
 
@@ -662,6 +895,9 @@ def render(template: str, variants: dict[str, dict], run: dict) -> str:
         "stress": lambda t: stress(t),
         "rl": lambda t: rl(t, variants),
         "noisy": lambda t, clean: noisy(t, clean),
+        "seeds": lambda: seeds_section(by_task),
+        "seeds_glance": lambda: seeds_glance(by_task).rstrip("\n"),
+        "seeds_planned": lambda: ", ".join(map(str, PLANNED_SEEDS)),
     }
 
     def sub(m: re.Match) -> str:
@@ -690,6 +926,12 @@ def main() -> None:
                     help="first write docs/results/rl-<task>.json from a run directory where `neurosym rl` ran")
     ap.add_argument("--collect-noisy", default="", metavar="EXP",
                     help="first write docs/results/<task>.json from a link-failure run directory (appendix E)")
+    ap.add_argument("--seeds", default=str(SEEDS), metavar="DIR",
+                    help="the seed files to render the training-seed sections from (default docs/results/seeds)")
+    ap.add_argument("--out", default="", metavar="FILE",
+                    help="write the page here instead of docs/results.md (a preview; --check still reads the page)")
+    ap.add_argument("--seed-figures", default="", metavar="DIR",
+                    help="draw the training-seed figures from --seeds into DIR (with --figures: docs/figures)")
     a = ap.parse_args()
     if a.collect:
         collect(Path(a.root))
@@ -706,8 +948,11 @@ def main() -> None:
         for task in VARIANTS:
             draw_pareto(task)
             draw_stress(task)
-    text = render(TEMPLATE.read_text(), *load())
-    target = DOCS / "results.md"
+    by_task = load_seeds(Path(a.seeds))
+    if a.seed_figures or a.figures:
+        draw_seed_figures(by_task, Path(a.seed_figures) if a.seed_figures else DOCS / "figures")
+    text = render(TEMPLATE.read_text(), *load(), by_task)
+    target = Path(a.out) if a.out and not a.check else DOCS / "results.md"
     if a.check:
         if target.read_text() != text:
             print("docs/results.md is not what docs/results.template.md and docs/results/ give; "

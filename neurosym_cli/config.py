@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
-from .verb_config import RenderConfig, RLConfig, SelectConfig, StressConfig
+from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
 
@@ -267,6 +267,7 @@ class RunConfig:
     """render, figures: the evaluation protocol's episode (0, 1, ...: the test episodes of eval seed 0, then 1, ...)"""
     render: RenderConfig = field(default_factory=RenderConfig)
     select: SelectConfig = field(default_factory=SelectConfig)
+    report: ReportConfig = field(default_factory=ReportConfig)
     stress: StressConfig = field(default_factory=StressConfig)
     rl: RLConfig = field(default_factory=RLConfig)
     selected: bool = False

@@ -17,6 +17,7 @@ from .tasks.base import Task, Rng, group_by_agents
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer
 from .rollout import rollout
+from .stats import mean_ci
 from .utils.seeding import STREAM_EVAL, STREAM_VAL, generator
 
 
@@ -55,12 +56,14 @@ def evaluate(
 
 
 def summarize(rows: Sequence[dict[str, float]]) -> dict[str, dict[str, float]]:
-    """Mean, sample std (ddof 1) and a 95% normal interval half-width over seeds, per metric."""
+    """Per metric over the evaluation seeds of ONE trained model: mean, sample std (ddof 1), n, and ``ci95``, the
+    half-width of the 95 % Student-t interval of the mean (stats.mean_ci; 0 for one seed). That interval is
+    episode noise of this one model, how well it was measured, not the uncertainty of the method: that comes
+    from training seeds (`neurosym report`, stats.across_seeds)."""
     out = {}
     n = len(rows)
-    for m in [k for k in rows[0] if k not in ("seed", "episodes")]:
-        vals = [r[m] for r in rows]
-        mean = sum(vals) / n
-        std = math.sqrt(sum((v - mean) ** 2 for v in vals) / (n - 1)) if n > 1 else 0.0
-        out[m] = {"mean": mean, "std": std, "ci95": 1.96 * std / math.sqrt(n), "n": n}
+    for m in [k for k in rows[0] if k not in ("seed", "episodes")]:  # the shared metrics, then the task's own
+        mean, half = mean_ci([r[m] for r in rows])
+        std = math.sqrt(sum((r[m] - mean) ** 2 for r in rows) / (n - 1)) if n > 1 else 0.0
+        out[m] = {"mean": mean, "std": std, "ci95": half if n > 1 else 0.0, "n": n}
     return out

@@ -49,9 +49,11 @@ def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsi
                     arrowprops={"arrowstyle": "-", "color": colors[k], "lw": 0.5} if ly != ys[k] else None)
 
 
-def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title: str, path: Path) -> Path:
-    """The paper's Figure 2, one panel more: rows (baseline label, summary with mean/std of cost, max_in, max_out)
-    -> PNG with (a) loss per baseline, (b) max in- and out-degree per baseline, tf-full's drawn as what it is
+def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title: str, path: Path,
+            err: str = "std") -> Path:
+    """The paper's Figure 2, one panel more: rows (baseline label, summary with the mean and ``err``, the error bar
+    the title names, of cost, max_in, max_out) -> PNG with (a) loss per baseline, (b) max in- and out-degree per
+    baseline, tf-full's drawn as what it is
     (every other agent) and marked so, (c) loss against max in-degree, the trade-off the method is about."""
     import matplotlib
 
@@ -66,14 +68,14 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     hears_all = [baseline_of(lbl) == "tf-full" for lbl in labels]
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(13.5, 0.34 * len(rows) + 2.6), dpi=120,
                                   gridspec_kw={"width_ratios": [1, 1, 1.25]})
-    a.barh(y, get("cost", "mean"), xerr=get("cost", "std"), color=colors, capsize=2)
+    a.barh(y, get("cost", "mean"), xerr=get("cost", err), color=colors, capsize=2)
     a.set_yticks(y, labels, fontsize=8)
     a.set_xlabel("loss (time-averaged, summed over agents; lower is better)", fontsize=8)
     a.set_title("(a) loss", fontsize=9)
     h = 0.38
-    b.barh(y + h / 2, get("max_in", "mean"), h, xerr=get("max_in", "std"), color=colors, capsize=2,
+    b.barh(y + h / 2, get("max_in", "mean"), h, xerr=get("max_in", err), color=colors, capsize=2,
            label="max in-degree (solid)")
-    b.barh(y - h / 2, get("max_out", "mean"), h, xerr=get("max_out", "std"), color=colors, capsize=2, alpha=0.55,
+    b.barh(y - h / 2, get("max_out", "mean"), h, xerr=get("max_out", err), color=colors, capsize=2, alpha=0.55,
            hatch="///", label="max out-degree (hatched)")
     for yy, v, alltalk in zip(y, np.maximum(get("max_in", "mean"), get("max_out", "mean")), hears_all):
         if alltalk:
@@ -86,7 +88,7 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     b.set_title("(b) communication degree", fontsize=9)
     b.legend(fontsize=7, frameon=False, loc="lower right")
     xs, ls = get("max_in", "mean"), get("cost", "mean")
-    for col, x, xe, l, le in zip(colors, xs, get("max_in", "std"), ls, get("cost", "std")):
+    for col, x, xe, l, le in zip(colors, xs, get("max_in", err), ls, get("cost", err)):
         c.errorbar(x, l, xerr=xe, yerr=le, fmt="o", color=col, ms=6, capsize=2)
     c.margins(x=0.25, y=0.12)
     x0, x1 = c.get_xlim()
@@ -257,4 +259,84 @@ def stress_plot(results: Sequence[Mapping], cfg, path: Path) -> Path:
                  f"{cfg.task.agents_per_group} per group with no link failure), mean ± 95 % interval over "
                  f"{cfg.stress.seeds} test seeds", fontsize=9)
     fig.tight_layout(rect=(0, 0.05, 1, 0.96))
+    return save_figure(fig, path)
+
+
+_SEED_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
+def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across: Mapping[str, tuple],
+                title: str, path: Path) -> Path:
+    """Loss against max degree over training seeds: per baseline one small marker per training seed (its model's
+    mean over the evaluation seeds; marker shape = seed) and the across-seed mean with its 95 % t-interval on both
+    axes as error bars (none for one seed). ``points``: baseline -> [(seed, max degree, loss)]; ``across``:
+    baseline -> (mean degree, degree half-width or None, mean loss, loss half-width or None)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    fig, ax = plt.subplots(figsize=(8.2, 5.6), dpi=120)
+    seeds = sorted({s for pts in points.values() for s, _, _ in pts})
+    marker = {s: _SEED_MARKERS[k % len(_SEED_MARKERS)] for k, s in enumerate(seeds)}
+    names, xs, ys, cols = [], [], [], []
+    for b, pts in points.items():
+        col = color(baseline_of(b))
+        for s, x, y in pts:
+            ax.scatter(x, y, s=22, marker=marker[s], facecolors="none", edgecolors=col, lw=0.9, zorder=3)
+        mx, hx, my, hy = across[b]
+        ax.errorbar(mx, my, xerr=hx, yerr=hy, fmt="o", ms=7, color=col, capsize=3, lw=1.2, zorder=4)
+        names.append(b), xs.append(mx), ys.append(my), cols.append(col)
+    ax.margins(x=0.3, y=0.12)
+    x0, x1 = ax.get_xlim()
+    ax.set_xlim(max(x0, -0.06 * x1), x1)  # a degree is never negative
+    place_labels(ax, xs, ys, names, cols)
+    handles = [Line2D([], [], ls="", marker="o", ms=7, color="0.3",
+                      label="mean over training seeds ± 95 % t-interval")]
+    handles += [Line2D([], [], ls="", marker=marker[s], ms=5, mfc="none", mec="0.3", label=f"training seed {s}")
+                for s in seeds]
+    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=min(4, len(handles)),
+              frameon=False)
+    ax.set_xlabel("max degree (in + out, the paper's deg; mean over steps, episodes and evaluation seeds)",
+                  fontsize=8)
+    ax.set_ylabel("loss (lower is better)", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, lw=0.5)
+    ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def profile_plot(curves: Mapping[str, tuple], taus: Sequence[float], title: str, note: str, path: Path) -> Path:
+    """Performance profiles (rliable's score distributions): per baseline the fraction of (task, training seed)
+    runs whose normalized score exceeds tau, with its 95 % stratified bootstrap band. ``curves``: baseline ->
+    (profile, lower, upper), each len(taus); ``note``: a line under the axes (the runs counted, those left out)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8.2, 5.4), dpi=120)
+    for b, (prof, lo, hi) in curves.items():
+        col = color(baseline_of(b))
+        ax.plot(taus, prof, color=col, lw=1.5, label=b, drawstyle="steps-post")
+        ax.fill_between(taus, lo, hi, color=col, alpha=0.12, step="post", lw=0)
+    for x, what, y in ((0.0, "no-comm = 0", 0.97), (1.0, "tf-full = 1", 0.91)):  # staggered: never overprinted
+        ax.axvline(x, color="0.5", ls=":", lw=1)
+        ax.annotate(f" {what}", (x, y), xycoords=("data", "axes fraction"), va="top", fontsize=7, color="0.35",
+                    bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 0.5})
+    ax.set_ylim(-0.02, 1.05)
+    ax.set_xlabel("normalized score tau = (no-comm loss - loss) / (no-comm loss - tf-full loss), per task and "
+                  "training seed (higher is better)", fontsize=8)
+    ax.set_ylabel("fraction of runs (task, training seed) with score > tau", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, lw=0.5)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    import textwrap
+
+    lines = textwrap.wrap(note, 150)
+    fig.text(0.01, 0.01, "\n".join(lines), fontsize=7, color="0.3", ha="left", va="bottom")
+    fig.tight_layout(rect=(0, 0.025 + 0.02 * len(lines), 1, 1))
     return save_figure(fig, path)

@@ -1,4 +1,4 @@
-"""Typed schemas of the verbs beyond the paper's main protocol: render and figures, select, stress, and the rl
+"""Typed schemas of the verbs beyond the paper's main protocol: render and figures, select, report, stress, and the rl
 baseline with its verb (stdlib only). ``config.RunConfig`` holds one of each; the schemas of training, search and
 evaluation live in config.py."""
 
@@ -60,6 +60,26 @@ class SelectConfig:
                "select.features must be a non-empty list of v1, v2")
         _check(self.finalists >= 1, f"select.finalists must be at least 1, got {self.finalists}")
         _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
+
+
+@dataclass
+class ReportConfig:
+    """`neurosym report`: statistics across training seeds (neurosym_cli/seeds.py, stats.py)."""
+
+    mix: bool = False
+    """report over training seeds whose settings differ (budget, task settings, K, lambda, features, search
+    settings...): false refuses in one line naming the first differing key; true reports them together and says
+    what differs. What `neurosym select` picked per seed is the method's outcome and may always differ"""
+    seed_files: str = ""
+    """a directory of seed files (docs/results/seeds, written by benchmarks/run_seeds.py) to report instead of run
+    directories: every task found there, into report_dir (default: that directory's report/)"""
+    reps: int = 50000
+    """bootstrap resamples of the IQM and probability-of-improvement intervals (rliable's default)"""
+    bootstrap_seed: int = 0
+    """seed of the bootstrap: the same seed gives the same intervals"""
+
+    def __post_init__(self) -> None:
+        _check(self.reps >= 100, f"report.reps must be at least 100, got {self.reps}")
 
 
 @dataclass

@@ -278,19 +278,26 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
 def test_per_seed_pipelines_and_report(tmp_path):
     run(["pipeline", "-m", "seed=0,1", "task=random-grid", "budget=tiny", "baselines=[tf-full,prog]"], tmp_path)
     assert not list(tmp_path.glob("random-grid/tiny/seed*/eval/*.png"))  # plots=false: tables and files only
-    p = run(["report", "task=random-grid", "budget=tiny"], tmp_path, plots=True)
-    assert "2 training seeds" in p.stdout
+    p = run(["report", "task=random-grid", "budget=tiny", "report.reps=1000"], tmp_path, plots=True)
+    words = " ".join(p.stdout.replace("│", " ").split())
+    assert "random-grid: 2 training seeds (0, 1)" in words
+    assert "mean ± 95 % Student-t interval across training seeds (1 degree of freedom)" in words
     p = run(["report", f"report_dir={tmp_path / 'random-grid/tiny/seed1'}"], tmp_path, plots=True)
     words = " ".join(p.stdout.replace("│", " ").split())  # rich wraps a title that holds a long path
-    assert "1 training seed:" in words and (tmp_path / "random-grid/tiny/seed1/report.png").exists()
-    rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
-    assert set(rep["baselines"]) == {"tf-full", "prog-k2-lam0.5-v1"}
-    assert rep["baselines"]["tf-full"]["cost"]["train_seeds"] == 2
-    assert (tmp_path / "random-grid/tiny/report.png").stat().st_size > 1000
-    assert (tmp_path / "random-grid/tiny/report_curves.png").stat().st_size > 1000  # training curves
+    assert "random-grid: 1 training seed (1)" in words and "no interval across one training seed" in words
+    assert (tmp_path / "random-grid/tiny/seed1/report.png").exists()
+    rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())["tasks"]["random-grid"]
+    assert set(rep["baselines"]) == {"tf-full", "prog"} and rep["seeds"] == [0, 1]
+    assert rep["baselines"]["prog"]["labels"] == ["prog-k2-lam0.5-v1"] * 2
+    assert rep["baselines"]["tf-full"]["train_seeds"] == 2 and rep["baselines"]["tf-full"]["cost"]["ci95"] > 0
+    for png in ("report.png", "report_curves.png", "pareto.png", "seeds-random-grid.png"):
+        assert (tmp_path / "random-grid/tiny" / png).stat().st_size > 1000, png
+    assert not (tmp_path / "random-grid/tiny/seeds-profile.png").exists()  # no no-comm: nothing to normalize by
     pareto = (tmp_path / "random-grid/tiny/pareto.csv").read_text().splitlines()
     assert pareto[0].startswith("label,max_degree,loss,non_dominated") and len(pareto) == 3
-    assert (tmp_path / "random-grid/tiny/pareto.png").stat().st_size > 1000
-    assert (tmp_path / "random-grid/tiny/report.csv").read_text().startswith("baseline,cost_mean,cost_std")
+    assert (tmp_path / "random-grid/tiny/report.csv").read_text().startswith(
+        "task,baseline,labels,metric,train_seeds,seeds,mean,ci95_half")
+    marl = json.loads((tmp_path / "random-grid/tiny/report_marl_eval.json").read_text())
+    assert set(marl["neurosym"]["random-grid"]["prog"]) == {"seed0", "seed1"}
     p = run(["report", "task=random-cross", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym pipeline task=random-cross" in p.stderr

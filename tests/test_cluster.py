@@ -80,9 +80,9 @@ def test_submitit_local_two_seed_sweep_then_report(tmp_path):
     for s in (0, 1):
         assert f"[seed={s}] pipeline done: 6 stages for random-grid (tiny budget, seed {s})" in text
     p = run(["report", "task=random-grid", "budget=tiny"], tmp_path)
-    rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())
-    assert rep["seeds"] == ["seed0", "seed1"]
-    assert rep["baselines"]["prog-retrained-k2-lam0.5-v1"]["cost"]["train_seeds"] == 2
+    rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())["tasks"]["random-grid"]
+    assert rep["seeds"] == [0, 1]
+    assert rep["baselines"]["prog-retrained"]["train_seeds"] == 2
 
 
 # --- run tracking -----------------------------------------------------------------------------------------------

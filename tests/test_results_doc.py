@@ -42,11 +42,11 @@ def test_paired_difference_and_verdicts():
                            "dt:max_in": 9.0})
     d, h = results_doc.paired(v, "prog-retrained", "dist")
     assert d == pytest.approx(-(0.8 + 0.7 + 1.4) / 3) and h > 0
-    verdicts = {short: ok for short, _, _, ok in results_doc.claims("random-cross", v)}
+    verdicts = {c.short: c.holds for c in results_doc.claims("random-cross", v)}
     assert all(verdicts.values()), verdicts
     costs["dist"] = [10.0, 11.4, 12.0]  # now no better on average: the claim must fail
     v = _variant(costs, **{"hard-attn:max_out": 9.0, "prog-retrained:max_out": 3.0})
-    verdicts = {short: ok for short, _, _, ok in results_doc.claims("random-cross", v)}
+    verdicts = {c.short: c.holds for c in results_doc.claims("random-cross", v)}
     assert not verdicts["prog-retrained better than dist"]
     assert not verdicts["det-prog-retrained has a worse max out-degree"]  # 1.0 vs 3.0
 

@@ -3,13 +3,13 @@ a (task, budget), in the paper's order (``baselines.BASELINES``), as tables and 
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from .. import baselines
 from ..config import RunConfig
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
+from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
 
@@ -30,37 +30,22 @@ def _metrics(path: Path) -> dict:
     return m
 
 
+def _eval_interval(m: dict) -> dict:
+    """The summary with ``ci95`` recomputed from the per-seed rows (t, not the 1.96 that older files hold)."""
+    rows = m.get("per_seed") or []
+    out = {}
+    for k, s in m["summary"].items():
+        vals = [r[k] for r in rows if isinstance(r, dict) and isinstance(r.get(k), (int, float))]
+        out[k] = {**s, "ci95": mean_ci(vals)[1] if len(vals) > 1 else 0.0} if isinstance(s, dict) else s
+    return out
+
+
 def collect(exp_dir: Path) -> Rows:
-    """Every baseline evaluated in an experiment directory, in the paper's order."""
+    """Every baseline evaluated in an experiment directory, in the paper's order (summaries over its evaluation
+    seeds: mean, std, ci95 = the 95 % t half-width)."""
     found = [_metrics(f) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
     found.sort(key=lambda m: (baselines.rank(m["baseline"]), m["label"]))
-    return [(m["label"], m["summary"]) for m in found]
-
-
-def aggregate(root: Path) -> tuple[Rows, list[str]]:
-    """(label, summary) per baseline over the seed directories under ``root`` (or of ``root`` itself): the mean
-    over training seeds of each metric and the spread across them; with one training seed, its spread over
-    evaluation seeds. Also the seed directories found."""
-    by_label: dict[str, list[dict]] = {}
-    names: dict[str, str] = {}
-    files = sorted(root.glob("seed*/eval/*/metrics.json")) or sorted(root.glob("eval/*/metrics.json"))
-    seeds = sorted({f.parents[2].name for f in files})
-    for f in files:
-        m = _metrics(f)
-        by_label.setdefault(m["label"], []).append(m["summary"])
-        names[m["label"]] = m["baseline"]
-    rows = []
-    for label, sums in by_label.items():
-        out = {}
-        for k in METRICS:
-            means = [s[k]["mean"] for s in sums]
-            n = len(means)
-            mean = sum(means) / n
-            std = (math.sqrt(sum((x - mean) ** 2 for x in means) / (n - 1)) if n > 1 else sums[0][k]["std"])
-            out[k] = {"mean": mean, "std": std, "train_seeds": n}
-        rows.append((label, out))
-    rows.sort(key=lambda r: (baselines.rank(names[r[0]]), r[0]))
-    return rows, seeds
+    return [(m["label"], _eval_interval(m)) for m in found]
 
 
 def _model_baseline(model: str) -> tuple[str, bool]:
@@ -128,8 +113,8 @@ def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[
 
 
 def title(cfg: RunConfig) -> str:
-    return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
-            f"mean ± std over {cfg.budget.eval_seeds} eval seeds")
+    return (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): mean ± 95 % Student-t interval "
+            f"over {cfg.budget.eval_seeds} evaluation seeds of each trained model (one training seed)")
 
 
 def write_figure(cfg: RunConfig) -> Path:
@@ -138,46 +123,148 @@ def write_figure(cfg: RunConfig) -> Path:
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
                  "training curves", Path(cfg.exp_dir) / "eval" / "curves.png")
     return figure2(collect(Path(cfg.exp_dir)), title(cfg).replace(": ", ":\n"),
-                   Path(cfg.exp_dir) / "eval" / "figure2.png")
+                   Path(cfg.exp_dir) / "eval" / "figure2.png", err="ci95")
 
 
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
-    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS))
+    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS, err="ci95"))
     if cfg.plots:
         png = write_figure(cfg)
         console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
 
 
+def across_table(s, digits: int = 3):
+    """The rich table of one task's across-seed statistics (seeds.Summary); its caption says what every ± is."""
+    from rich.table import Table
+
+    from .. import seeds
+
+    n = len(s.seeds)
+    t = Table(title=f"{s.task}: {n} training seed{'s' if n > 1 else ''} ({', '.join(map(str, s.seeds))})",
+              caption=seeds.caption(n), header_style="bold", caption_justify="left")
+    t.add_column("baseline")
+    t.add_column("n seeds", justify="right")
+    for _, head in COLUMNS:
+        t.add_column(head, justify="right")
+    if n > 1:
+        t.add_column("loss IQM [bootstrap 95 %]", justify="right")
+    for key, m in s.rows.items():
+        one = m["cost"]["n"] == 1
+        cells = [(f"{m[k]['mean']:.{digits}f} ± {m[k]['eval_ci95']:.{digits}f}" if one and n == 1
+                  else seeds.fmt_mean(m[k], digits)) for k, _ in COLUMNS]
+        t.add_row(key, str(m["cost"]["n"]), *cells, *([seeds.fmt_iqm(m["cost"], digits)] if n > 1 else []))
+    return t
+
+
+def improvement_table(s):
+    """P(prog-retrained improves on each other baseline) on the loss, with its bootstrap interval."""
+    from rich.table import Table
+
+    from .. import seeds
+
+    t = Table(title=f"{s.task}: probability of improvement on the loss over training seeds",
+              caption="P(X improves on Y) = share of (seed of X, seed of Y) pairs where X's loss is lower, ties 1/2 "
+                      "(rliable's Mann-Whitney form); [95 % stratified independent bootstrap percentile interval]; "
+                      "0.5 = no difference", header_style="bold", caption_justify="left")
+    for c in ("X", "Y", "P(X improves on Y)", "seeds X / Y"):
+        t.add_column(c, justify="left" if c in ("X", "Y") else "right")
+    for r in s.improvement:
+        t.add_row(r["x"], r["y"], seeds.fmt_p(r), f"{r['n_x']} / {r['n_y']}")
+    return t
+
+
+def write_across(by_task: dict, summaries: dict, out: Path, head: str, plots: bool) -> list[Path]:
+    """report.json (per task the across-seed statistics), report.csv (long: task, baseline, metric, ...),
+    improvement.csv, report_marl_eval.json (marl-eval's raw layout) and, with plots, the across-seed figures."""
+    from .. import seeds
+
+    files = [out / "report.json", out / "report.csv", out / "improvement.csv", out / "report_marl_eval.json"]
+    write_json(files[0], {"convention": {"mean ± ci95": "95 % Student-t interval across training seeds",
+                                         "iqm [iqm_lo, iqm_hi]": "25 % trimmed mean, 95 % stratified bootstrap "
+                                                                 "percentile interval (rliable)",
+                                         "eval_ci95": "one training seed only: 95 % t-interval over the "
+                                                      "evaluation seeds of that one model"},
+                          "tasks": {t: {"seeds": s.seeds, "notes": s.notes, "baselines": {
+                              k: {**m, "train_seeds": m["cost"]["n"], "seed_list": s.row_seeds[k],
+                                  "labels": s.labels[k]} for k, m in s.rows.items()},
+                              "improvement": s.improvement} for t, s in summaries.items()}})
+    write_csv(files[1], [row for s in summaries.values() for row in seeds.csv_rows(s)])
+    write_csv(files[2], [row for s in summaries.values() for row in seeds.improvement_rows(s)])  # empty: none
+    write_json(files[3], seeds.marl_eval(by_task))
+    if plots:
+        files += seeds.draw(by_task, out, mix=True)  # the settings were checked (or mixing asked) above
+    return files
+
+
 def report(cfg: RunConfig) -> dict:
-    """`neurosym report`: the evaluations of every training seed of a (task, budget), or of ``report_dir``, as one
-    table; writes report.json, report.csv and report.png beside the seed directories."""
-    root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.exp_dir).parent  # <runs_root>/<task>/<budget>
-    rows, seeds = aggregate(root)
-    if not rows:
-        raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
-                            f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
-    n = max(r[1]["cost"]["train_seeds"] for r in rows)
-    spread = "std over training seeds" if n > 1 else "std over evaluation seeds (one training seed)"
-    where = str(root) if cfg.report_dir else f"{cfg.task.name} ({cfg.budget.name} budget)"
-    head = f"{where}, {len(seeds)} training seed{'s' if len(seeds) > 1 else ''}: mean ± {spread}"
-    console.print(metrics_table(head, rows, COLUMNS))
+    """`neurosym report`: across the training seeds of a (task, budget) (<runs_root>/<task>/<budget>/seed*), of
+    ``report_dir``, or of the seed files in ``report.seed_files``: per baseline and metric the mean ± 95 % t-interval
+    across seeds and the IQM with its bootstrap interval, the probability of improvement of prog-retrained over
+    the others; tables on screen, CSV, JSON and marl-eval JSON beside them (figures with plots=true). Reads only;
+    writes only its report files."""
+    from .. import seeds
+
+    rc = cfg.report
+    if rc.seed_files:
+        src = Path(rc.seed_files)
+        files = sorted(src.glob("*.json")) if src.is_dir() else []
+        if not files:
+            raise ArtifactError(f"no seed files in {src}; benchmarks/run_seeds.py writes them "
+                                "(docs/results/seeds/<task>-seed<S>.json)")
+        by_task = seeds.from_seed_files(files)
+        out = Path(cfg.report_dir) if cfg.report_dir else src / "report"
+        head = f"seed files of {src}"
+    else:
+        root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.exp_dir).parent  # <runs_root>/<task>/<budget>
+        runs = seeds.from_runs_root(root)
+        if not runs:
+            raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
+                                f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
+        task = runs[0].task or cfg.task.name
+        by_task = {task: runs}
+        out = root
+        head = str(root) if cfg.report_dir else f"{cfg.task.name}, {cfg.budget.name} budget"
+    summaries = {t: seeds.summarize(r, rc.mix, rc.reps, rc.bootstrap_seed) for t, r in by_task.items()}
+    for s in summaries.values():
+        console.print(across_table(s))
+        if any(r["lo"] is not None for r in s.improvement):
+            console.print(improvement_table(s))
+        elif s.improvement:
+            console.print(f"{s.task}: probability of improvement not shown: one training seed per baseline (it would "
+                          "be 0, 1/2 or 1, one comparison; improvement.csv has it)")
+        for line in s.notes:
+            console.print(f"[yellow]mixed (report.mix=true):[/] {line}")
     try:
-        write_json(root / "report.json", {"task": cfg.task.name, "budget": cfg.budget.name, "seeds": seeds,
-                                          "baselines": {label: s for label, s in rows}})
-        write_csv(root / "report.csv", [{"baseline": label, **{f"{k}_{x}": s[k][x] for k in METRICS
-                                                               for x in ("mean", "std")}} for label, s in rows])
-        pareto_csv, pareto_png = write_pareto(rows, root, head, cfg.plots)
-        png = figure2(rows, head.replace(": ", ":\n"), root / "report.png") if cfg.plots else None
-        plural = "s" if len(seeds) > 1 else ""
-        curves = write_curves(root, f"{where}: training curves, {len(seeds)} training seed{plural}",
-                              root / "report_curves.png") if cfg.plots else None
-    except (ArtifactError, OSError) as e:  # an archived, read-only directory: the table above is the report
-        log.warning("report files not written (%s); the table above is the report", e)
+        files = write_across(by_task, summaries, out, head, cfg.plots)
+        if not rc.seed_files:
+            rows = _rows_for_figures(summaries[next(iter(summaries))])
+            pareto_csv, pareto_png = write_pareto(rows, out, head, cfg.plots)
+            files += [pareto_csv] + ([pareto_png] if pareto_png else [])
+            if cfg.plots:
+                n = len(by_task[next(iter(by_task))])
+                what = ("mean ± 95 % t-interval across training seeds" if n > 1 else
+                        "1 training seed: mean ± 95 % t-interval over its evaluation seeds")
+                files.append(figure2(rows, f"{head}, {n} training seed{'s' if n > 1 else ''}:\n{what}",
+                                     out / "report.png", err="err"))
+                curves = write_curves(out, f"{head}: training curves, {n} training seed{'s' if n > 1 else ''}",
+                                      out / "report_curves.png")
+                files += [curves] if curves else []
+    except (ArtifactError, OSError) as e:  # an archived, read-only directory: the tables above are the report
+        log.warning("report files not written (%s); the tables above are the report", e)
         return {"report": None}
-    console.print(f"wrote {root / 'report.json'}, {root / 'report.csv'}, {pareto_csv}"
-                  + "".join(f", {f}" for f in (png, pareto_png, curves) if f))
-    figures = sorted(root.glob("seed*/figures/*.png")) or sorted(root.glob("figures/*.png"))
-    if figures:  # drawn per training seed by the pipeline or `neurosym figures`
-        console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
-    return {"report": str(root / "report.json")}
+    console.print("wrote " + ", ".join(str(f) for f in files))
+    if not rc.seed_files:
+        figures = sorted(out.glob("seed*/figures/*.png")) or sorted(out.glob("figures/*.png"))
+        if figures:  # drawn per training seed by the pipeline or `neurosym figures`
+            console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
+    return {"report": str(out / "report.json")}
+
+
+def _rows_for_figures(s) -> Rows:
+    """(baseline, summary) rows with ``err`` = the across-seed t half-width (one seed: the evaluation-seed one)."""
+    rows = []
+    for key, m in s.rows.items():
+        rows.append((key, {k: {"mean": v["mean"], "err": v["ci95"] if v["n"] > 1 else v["eval_ci95"]}
+                           for k, v in m.items()}))
+    return rows

@@ -22,10 +22,11 @@ from typing import Any
 from .. import __version__, paths
 from ..baselines import get
 from ..config import RunConfig
+from ..stats import mean_ci
 from ..utils.console import clock, say
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
-from .select import mean_ci, quiet_job, run_jobs, validate
+from .select import quiet_job, run_jobs, validate
 
 
 def grid(cfg: RunConfig) -> list[RunConfig]:
@@ -114,7 +115,7 @@ def print_grid(cfg: RunConfig, rows: list[dict[str, Any]], test: dict) -> None:
     from ..utils.console import console
 
     t = Table(title=f"rl (communication decisions as actions): {cfg.task.name}, {cfg.budget.val_seeds} validation "
-                    "seeds", header_style="bold")
+                    "seeds; ± = 95 % Student-t interval over the validation seeds", header_style="bold")
     for c in ("setting", "cost", "reward", "init", "val loss ± CI", "max in", "max out", "max deg", "rollouts/s", ""):
         t.add_column(c, justify="left" if c in ("setting", "reward", "init", "") else "right")
     for r in sorted(rows, key=lambda r: r["val_loss"]):
@@ -124,6 +125,7 @@ def print_grid(cfg: RunConfig, rows: list[dict[str, Any]], test: dict) -> None:
                   f"[green]◀ {r['pick']}[/]" if r["pick"] else "")
     console.print(t)
     for label, s in test.items():
-        console.print(f"test ({cfg.budget.eval_seeds} seeds) {label}: loss {s['cost']['mean']:.3f} ± "
+        console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
+                      f"one model) {label}: loss {s['cost']['mean']:.3f} ± "
                       f"{s['cost']['ci95']:.3f}, max in-degree {s['max_in']['mean']:.2f}, max out-degree "
                       f"{s['max_out']['mean']:.2f}, max degree {s['max_degree']['mean']:.2f}")

@@ -16,7 +16,6 @@ here: the paired 95 % interval (Student t, over validation seeds) of the loss di
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -28,31 +27,13 @@ from typing import Any, Callable, Sequence
 from .. import __version__, paths
 from ..baselines import get
 from ..config import ConfigError, RunConfig, UserError
+from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 
-# two-sided 95 % Student t quantiles by degrees of freedom (1..30); 1.96 beyond
-_T95 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
-        2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042)
-
 DEGREE = "max_degree"
 """the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
-
-
-def t95(n: int) -> float:
-    """Two-sided 95 % Student t quantile for ``n`` paired samples (n - 1 degrees of freedom)."""
-    return _T95[n - 2] if 2 <= n <= 31 else 1.96
-
-
-def mean_ci(xs: Sequence[float]) -> tuple[float, float]:
-    """(mean, 95 % Student t half-width) of a sample."""
-    n = len(xs)
-    m = sum(xs) / n
-    if n < 2:
-        return m, math.inf
-    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1))
-    return m, t95(n) * sd / math.sqrt(n)
 
 
 def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -351,7 +332,8 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
     from ..utils.console import console
 
     t = Table(title=f"selection by validation: {cfg.task.name}, {cfg.budget.val_seeds} validation seeds "
-                    f"(prog = oracle under the program; finalists retrained)", header_style="bold")
+                    f"(prog = oracle under the program; finalists retrained); ± = 95 % Student-t interval over the "
+                    "validation seeds (Δ best: paired)", header_style="bold")
     for c in ("#", "lam", "K", "feat", "objective", "val loss ± CI", "Δ best ± CI", "max in", "max out",
               "max deg", "retrained val loss", "ret. deg", ""):
         t.add_column(c, justify="left" if c in ("feat", "") else "right")
@@ -370,6 +352,7 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                   "(similar to the best, lowest degree first), the pick is the lowest max degree whose retrained "
                   "validation loss is similar to the best retrained one.")
     pr = test["prog-retrained"]
-    console.print(f"test ({cfg.budget.eval_seeds} seeds) of {picked}: prog-retrained loss "
+    console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
+                  f"one model) of {picked}: prog-retrained loss "
                   f"{pr['cost']['mean']:.3f} ± {pr['cost']['ci95']:.3f}, max in-degree {pr['max_in']['mean']:.2f}, "
                   f"max degree {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")

@@ -105,15 +105,17 @@ def _fmt(v: float) -> str:
     return f"{v:.4g}"
 
 
-def metrics_table(title: str, rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], columns: Sequence[tuple[str, str]]) -> Table:
-    """rows: (label, summary) with summary[metric] = {mean, std}; columns: (metric key, header)."""
+def metrics_table(title: str, rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]],
+                  columns: Sequence[tuple[str, str]], err: str = "std") -> Table:
+    """rows: (label, summary) with summary[metric] = {mean, std, ...}; columns: (metric key, header); ``err``: the
+    summary key printed after ± (the title says what it is)."""
     table = Table(title=title, header_style="bold")
     table.add_column("baseline")
     for _, header in columns:
         table.add_column(header, justify="right")
     for label, summary in rows:
         table.add_row(label, *(
-            f"{summary[m]['mean']:.3f} ± {summary[m]['std']:.3f}" if m in summary else "-" for m, _ in columns
+            f"{summary[m]['mean']:.3f} ± {summary[m][err]:.3f}" if m in summary else "-" for m, _ in columns
         ))
     return table
 
