@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
-from neurosym import ConfigError, Feature, Observation, Scene, TaskConfig, TaskState, vector_map
-from neurosym.tasks import clip_speed, pairwise_distances, safe_norm
+from neurosym import ConfigError, Observation, Scene, TaskConfig, TaskState, vector_map
+from neurosym.tasks import Columns, clip_speed, column_feature, pairwise_distances, safe_norm
 
 
 @dataclass
@@ -124,10 +124,9 @@ class RingTask:
     def features(self, version: str):
         """my slot vector (sx sy sd stheta), my position (px ...), its offset (dx dy d theta) and dv, its speed
         relative to me."""
-        dv = Feature("dv", "other", "its speed relative to me", "world units/s", (0.0, math.inf))
-        return vector_map([("s", "my slot", lambda v: -v.agent[..., :2]),
-                           ("p", "position", lambda v: v.agent[..., 2:4])], version,
-                          extra=[(dv, lambda v: v.rel[..., 2:4].norm(dim=-1))])
+        dv = column_feature("dv", "other", "its speed relative to me", Columns("rel", 2), "d", "world units/s")
+        return vector_map([("s", "my slot", Columns("agent", 0, -1.0)),   # slot - x: the input holds x - slot
+                           ("p", "position", Columns("agent", 2))], version, extra=[dv])
 
     # optional capabilities
     def distances(self, state: RingState) -> Tensor:

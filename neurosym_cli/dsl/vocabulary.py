@@ -19,6 +19,19 @@ VERSIONS = ("v1", "v2")
 
 
 @dataclass(frozen=True)
+class Source:
+    """How a feature is computed, as data (what `neurosym export` turns into code): the ``part`` (x, y, d = norm,
+    theta = atan2(y, x)) of the 2-D vector ``sign * <field>[..., start:start + 2]`` of an observation (field
+    ``agent``: s_i, (Ds,); ``rel``: o_ij, (Dp,)), or the ``product`` of two other features."""
+
+    field: str = ""
+    start: int = 0
+    sign: float = 1.0
+    part: str = ""
+    product: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class Feature:
     """One named feature of a task's feature map."""
 
@@ -34,6 +47,8 @@ class Feature:
     """the values the feature can take: a test outside them always or never holds (simplification, pictures)"""
     distance: bool = False
     """this is the distance to the other agent: readings say 'the nearest agent', 'within r'"""
+    source: Source | None = None
+    """how it is computed, as data, when it is (export needs it); None: only the task's own function knows"""
 
 
 @dataclass(frozen=True)

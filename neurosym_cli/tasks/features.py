@@ -9,10 +9,11 @@ are (B, N, N).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable, Mapping, Sequence
 
-from ..dsl.vocabulary import VERSIONS, Feature, FeatureSet, product_features, vector_features
+from ..dsl.vocabulary import VERSIONS, Feature, FeatureSet, Source, product_features, vector_features
 from ..errors import ConfigError
 from ..utils.lazy import LazyModule
 
@@ -88,6 +89,35 @@ VectorFn = Callable[["FeatureView"], "Tensor"]
 """(view) -> (B, N, 2) one of the agent's own state vectors, or (B, N, N, 2) the observation of the other agent"""
 
 
+@dataclass(frozen=True)
+class Columns:
+    """A 2-D vector read from an observation, as data: ``sign * view.<field>[..., start:start + 2]`` (field
+    ``agent`` (B, N, Ds) or ``rel`` (B, N, N, Dp)). Features built on it can be exported as code."""
+
+    field: str
+    start: int = 0
+    sign: float = 1.0
+
+    def __call__(self, v: "FeatureView") -> Tensor:
+        t = getattr(v, self.field)[..., self.start:self.start + 2]
+        return t if self.sign > 0 else -t
+
+    def source(self, part: str) -> Source:
+        return Source(self.field, self.start, self.sign, part)
+
+
+def column_feature(name: str, of: str, words: str, cols: Columns, part: str, unit: str = "",
+                   bounds: tuple[float, float] | None = None) -> tuple[Feature, FeatureFn]:
+    """One feature that is a part (x, y, d, theta) of a 2-D vector of the observation, declared with its source
+    (exportable), e.g. ring's dv: column_feature("dv", "other", "its speed relative to me", Columns("rel", 2), "d")."""
+    import math
+
+    b = bounds or ((0.0, math.inf) if part == "d" else (-math.pi, math.pi) if part == "theta"
+                   else (-math.inf, math.inf))
+    return (Feature(name, of, words, unit, b, source=cols.source(part)),  # type: ignore[arg-type]
+            _parts(cols, of == "self")[part])
+
+
 def _parts(vec: VectorFn, agent_level: bool) -> dict[str, FeatureFn]:
     """x, y, norm, angle of one 2-D vector; agent features get a trailing axis of 1 (they broadcast over j)."""
     post = (lambda t: t.unsqueeze(-1)) if agent_level else (lambda t: t)
@@ -97,6 +127,14 @@ def _parts(vec: VectorFn, agent_level: bool) -> dict[str, FeatureFn]:
         "d": lambda v: post(vec(v).norm(dim=-1)),
         "theta": lambda v: post(torch.atan2(vec(v)[..., 1], vec(v)[..., 0])),
     }
+
+
+def _with_source(fs: list[Feature], vec: VectorFn) -> list[Feature]:
+    """The four features of a vector, with their source when the vector is given as Columns (exportable)."""
+    if not isinstance(vec, Columns):
+        return fs
+    parts = ("x", "y", "d", "theta")
+    return [dataclasses.replace(f, source=vec.source(p)) for f, p in zip(fs, parts)]
 
 
 def vector_map(state: Sequence[tuple[str, str, VectorFn]], version: str, unit: str = "world units",
@@ -109,20 +147,21 @@ def vector_map(state: Sequence[tuple[str, str, VectorFn]], version: str, unit: s
     pairs, after those."""
     if version not in VERSIONS:
         raise ConfigError(f"features must be one of {', '.join(VERSIONS)}, got {version!r}")
-    obs = observation or (lambda v: v.rel[..., :2])
+    obs = observation or Columns("rel", 0)  # o_ij's offset x_j - x_i: the first two columns by convention
     feats: list[Feature] = []
     fns: dict[str, FeatureFn] = {}
     first: list[Feature] = []
     for prefix, owner, vec in state:
-        fs = vector_features(prefix, "self", owner, unit)
+        fs = _with_source(vector_features(prefix, "self", owner, unit), vec)
         first = first or fs
         feats += fs
         fns.update({f"{prefix}{part}": fn for part, fn in _parts(vec, True).items()})
-    other = vector_features("", "other", "", unit)
+    other = _with_source(vector_features("", "other", "", unit), obs)
     feats += other
     fns.update(dict(zip(("dx", "dy", "d", "theta"), _parts(obs, False).values())))
     if version == "v2" and first:
-        prods = product_features(first, other)
+        prods = [dataclasses.replace(p, source=Source(product=tuple(p.name.split("_"))))
+                 for p in product_features(first, other)]
         feats += prods
         for p in prods:
             a, o = p.name.split("_")

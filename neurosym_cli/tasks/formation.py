@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from ..errors import check as _check
 from ..utils.lazy import LazyModule
 from .base import EpisodeSeeder, Observation, Rng, Scene, TaskState, clip_speed, pairwise_distances, safe_norm
-from .features import FeatureMap, vector_map
+from .features import Columns, FeatureMap, vector_map
 from .planar import PlanarConfig, relative_observation
 from .sampling import sample_in_boxes
 
@@ -142,7 +142,7 @@ class FormationTask:
 
     def features(self, version: str) -> FeatureMap:
         """The goal vector g_i - x_i (gx gy gd gtheta) and o_ij (dx dy d theta); v2 adds gx_dx ... gy_dy."""
-        return vector_map([("g", "my goal", lambda v: -v.agent)], version)
+        return vector_map([("g", "my goal", Columns("agent", 0, -1.0))], version)  # g - x = -(x - g)
 
     def distances(self, state: FormationState) -> Tensor:
         """(B, N, N) noise-free pairwise distances, self excluded by +inf (dist's k-nearest)."""

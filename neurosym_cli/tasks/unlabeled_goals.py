@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from ..errors import check as _check
 from ..utils.lazy import LazyModule
 from .base import EpisodeSeeder, Observation, Rng, Scene, TaskState, clip_speed, pairwise_distances, safe_norm
-from .features import FeatureMap, vector_map
+from .features import Columns, FeatureMap, vector_map
 from .planar import PlanarConfig, collision_count, relative_observation
 from .sampling import sample_in_boxes
 
@@ -133,9 +133,9 @@ class UnlabeledGoalsTask:
     def features(self, version: str) -> FeatureMap:
         """Position px py pd ptheta, and the k-th nearest goal by initial distance g{k}x ... g{k}theta (the goal
         vector g - x), and o_ij (dx dy d theta); v2 adds px_dx ... py_dy."""
-        state = [("p", "position", lambda v: v.agent[..., :2])]
-        state += [(f"g{k + 1}", f"my goal {k + 1} (by initial distance)",
-                   lambda v, k=k: -v.agent[..., 2 + 2 * k:4 + 2 * k]) for k in range(self.n)]
+        state = [("p", "position", Columns("agent", 0))]
+        state += [(f"g{k + 1}", f"my goal {k + 1} (by initial distance)", Columns("agent", 2 + 2 * k, -1.0))
+                  for k in range(self.n)]  # the input holds x - g; the feature is g - x
         return vector_map(state, version)
 
     def distances(self, state: UnlabeledState) -> Tensor:
