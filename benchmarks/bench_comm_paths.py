@@ -89,7 +89,7 @@ def main() -> None:
         full = step_seconds(task, make_comm("full", task.rules), a.episodes, horizon, a.repeats)
         rows.append({"task": name, "provider": "full", "dense_s": full})
         print(f"| {name} | tf-full | {full:.3f} | - | - | 1.00 |", flush=True)
-        program = ProgramComm(parse(PROGRAMS.get(name, PROGRAMS["random-cross"])), task.kind)
+        program = ProgramComm(parse(PROGRAMS.get(name, PROGRAMS["random-cross"])), make_task(task).features("v1"))
         for label, comm in (("no-comm", make_comm("none", task.rules)),
                             (f"dist (K = {task.rules})", make_comm("nearest", task.rules)),
                             ("prog", program)):

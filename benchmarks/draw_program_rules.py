@@ -46,8 +46,8 @@ def main() -> None:
     cfg = compose_config("figures", [f"task={a.task}", "budget=paper"])
     env = make_task(cfg.task, cfg.horizon)
     torch.manual_seed(0)
-    policy = CommTransformer(env.obs_dim, env.action_dim, cfg.task.rounds, cfg.model)  # untrained: see above
-    comm = ProgramComm(program, cfg.task.kind, cfg.features)
+    policy = CommTransformer.for_task(env, cfg.model)  # untrained: see above
+    comm = ProgramComm(program, env.features(cfg.features))
     names = list(getattr(cfg.task, "test_settings", []) or [])
     for k in a.episodes:
         state, gen, seed = protocol_episode(env, k)
@@ -55,7 +55,7 @@ def main() -> None:
         setting = f", test setting {names[k % len(names)]}" if names else ""
         for r in range(program.n_rounds):
             out = f"{a.out}/{a.task}-rules-{tag}-episode{k}" + (f"-round{r + 1}" if program.n_rounds > 1 else "")
-            path = rule_regions(program, cfg.task.kind, cfg.features, rec, a.agent, 0, r, Path(f"{out}.png"),
+            path = rule_regions(program, comm.fmap, env.pair_dim, rec, a.agent, 0, r, Path(f"{out}.png"),
                                 f"{a.task} (paper budget, train seed 0): rules of {tag}, episode {k}{setting}")
             print(f"drew {path}")
 

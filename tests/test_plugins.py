@@ -146,3 +146,21 @@ def test_the_python_api_trains_searches_and_evaluates(tmp_path):
     assert p.returncode == 0  # the command line takes what Python made
     with pytest.raises(ns.UserError, match="did you mean"):
         ns.compose(task="ring", config_dir=str(RING), overrides={"task.radus": 1.0})
+
+
+def test_an_installed_package_offers_a_task_by_entry_point(tmp_path):
+    """A distribution's entry point in the group neurosym.tasks is a task= choice, with no config directory."""
+    site = tmp_path / "site"
+    dist = site / "ringpkg-0.1.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: ringpkg\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text("[neurosym.tasks]\nring-ep = ring:RingTask\n")
+    env = {**os.environ, "NEUROSYM_RUNS": str(tmp_path),
+           "PYTHONPATH": os.pathsep.join([str(site), str(ROOT / "examples" / "ring"), os.environ.get("PYTHONPATH", "")])}
+    p = subprocess.run([*neurosym_cmd(), "train", "task=ring-ep", "budget=tiny", "plots=false", "task.radius=2.5"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    import torch
+
+    saved = torch.load(tmp_path / "ring-ep/tiny/seed0/train/oracle/model.pt", weights_only=True)
+    assert saved["config"]["task"]["_target_"] == "ring:RingTask" and saved["config"]["task"]["radius"] == 2.5

@@ -4,7 +4,8 @@ import torch
 
 from neurosym_cli.config import ModelConfig
 from neurosym_cli.tasks.random_cross import CrossConfig
-from neurosym_cli.tasks import TaskState, Observation, Rng, make_task
+from neurosym_cli.tasks import Observation, Rng, make_task
+from neurosym_cli.tasks.formation import FormationState
 from neurosym_cli.policy import CommContext, CommTransformer, FullComm, NearestComm, NoComm, TopKComm
 from neurosym_cli.rollout import degree_stats, rollout
 
@@ -83,7 +84,7 @@ def _ctx(n=6, seed=0):
     env = make_task(CrossConfig(name="c", noise_std=0.0))
     g = torch.Generator().manual_seed(seed)
     pos = torch.randn(2, n, 2, generator=g) * 3
-    state = TaskState(pos, pos.clone(), torch.zeros(2, n, dtype=torch.long))
+    state = FormationState(pos, pos.clone(), torch.zeros(2, n, dtype=torch.long))
     obs = env.observe(state, Rng(g))
     return CommContext(env, state, obs, Rng(g)), torch.randn(2, n, n, generator=g)
 

@@ -229,11 +229,11 @@ def test_compiled_and_torch_scorers_run_the_same_search(case):
         pytest.skip("numba not installed")
     if case == "cross":
         env, pol, data = _setup()
-        kind, rnd, objective = "formation", 0, "paper"
+        rnd, objective = 0, "paper"
     else:
         task = UnlabeledConfig(name="u", horizon=6, rounds=2, agents_per_group=5)
         env, pol, data = _setup(task, rounds=2, rollouts=3)
-        kind, rnd, objective = "unlabeled", 0, "hinge"
+        rnd, objective = 0, "hinge"
     runs = []
     for backend in ("numba", "torch"):
         sc = CachedScorer(pol, env, data, rnd, "v1", 0.5, objective, 3, 1,

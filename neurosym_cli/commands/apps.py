@@ -52,7 +52,6 @@ APPS = {module: _make(module) for module, _ in COMMANDS.values()}
 def compose_config(cmd: str, overrides: list[str] | None = None) -> RunConfig:
     """The typed config a command composes from conf/ and overrides, outside any command (benchmarks, notebooks)."""
     from hydra import compose, initialize_config_module
-    from omegaconf import OmegaConf
 
     from ._run import typed_config
 
