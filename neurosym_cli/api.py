@@ -47,15 +47,9 @@ def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None 
     ``neurosym train task=random-grid rules=3``; dotted keys go in ``overrides`` (``{"task.radius": 4.0}``, or a
     list of override strings). ``config_dir``: your own config directory (its task/ YAMLs), as ``--config-dir``.
     Bad input raises UserError with the CLI's one-line message."""
-    from hydra import compose as hydra_compose
-    from hydra import initialize_config_module
-
     from .commands import COMMANDS as VERBS
-    from .commands import apps  # noqa: F401  (registers the baseline group and installed tasks in Hydra's store)
-    from .commands._run import typed_config
+    from .commands.apps import compose_config
     from .errors import UserError
-    from .overrides import check
-    from .tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
 
     name = VERBS[cmd][0] if cmd in VERBS else cmd
     if name not in COMMANDS:
@@ -63,28 +57,7 @@ def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None 
     items = list(overrides) if isinstance(overrides, list) else [f"{k}={_value(v)}" for k, v in
                                                                   {**(overrides or {})}.items()]
     items += [f"{k}={_value(v)}" for k, v in kwargs.items()]
-    extra = ["--config-dir", str(config_dir)] if config_dir else []
-    add_import_paths(import_paths(extra))
-    schemas = task_schemas(items + extra, name)
-    bad = check(items, schemas)
-    if bad:
-        raise UserError(bad)
-    items = force_task_keys(items, schemas)
-    if config_dir:
-        items.append(f"hydra.searchpath=[file://{Path(config_dir).absolute()}]")
-    from omegaconf.errors import OmegaConfBaseException
-
-    try:
-        with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
-            cfg = hydra_compose(name, overrides=items)
-    except Exception as e:  # Hydra's missing option, grammar errors: one line, as on the command line
-        if isinstance(e, UserError):
-            raise
-        raise UserError(str(e).splitlines()[0] if str(e) else type(e).__name__) from None
-    try:
-        return typed_config(cfg)
-    except OmegaConfBaseException as e:
-        raise UserError(str(e).splitlines()[0]) from None
+    return compose_config(name, items, str(config_dir) if config_dir else None)
 
 
 @contextlib.contextmanager

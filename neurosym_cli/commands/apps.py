@@ -49,11 +49,32 @@ def _make(name: str):
 APPS = {module: _make(module) for module, _ in COMMANDS.values()}
 
 
-def compose_config(cmd: str, overrides: list[str] | None = None) -> RunConfig:
-    """The typed config a command composes from conf/ and overrides, outside any command (benchmarks, notebooks)."""
+def compose_config(cmd: str, overrides: list[str] | None = None, config_dir: str | None = None) -> RunConfig:
+    """The typed config ``neurosym <cmd> <overrides>`` runs with, outside any command (the Python API, benchmarks,
+    notebooks): the same override checks as the console script, the task's schema keys, ``config_dir`` as
+    ``--config-dir``. Bad input raises UserError with the CLI's one-line message."""
+    from pathlib import Path
+
     from hydra import compose, initialize_config_module
 
+    from ..errors import UserError
+    from ..overrides import check
+    from ..tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
     from ._run import typed_config
 
-    with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
-        return typed_config(compose(cmd, overrides=overrides or []))
+    items = list(overrides or [])
+    extra = ["--config-dir", str(config_dir)] if config_dir else []
+    add_import_paths(import_paths(extra))
+    schemas = task_schemas(items + extra, cmd)
+    bad = check(items, schemas)
+    if bad:
+        raise UserError(bad)
+    items = force_task_keys(items, schemas)
+    if config_dir:
+        items.append(f"hydra.searchpath=[file://{Path(config_dir).absolute()}]")
+    try:
+        with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
+            cfg = compose(cmd, overrides=items)
+    except Exception as e:  # Hydra's missing option, grammar errors: one line, as on the command line
+        raise UserError(str(e).splitlines()[0] if str(e) else type(e).__name__) from None
+    return typed_config(cfg)
