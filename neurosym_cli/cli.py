@@ -218,6 +218,36 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     return [*args, f"hydra.run.dir={logs}", f"hydra.sweep.dir={logs}"], None
 
 
+def print_typed_config(cmd: str, args: list[str]) -> None:
+    """`--cfg job`: the typed config the run would use, every field of the task's own schema with its value and no
+    interpolation left (``rules: 5``, not ``rules: ${task.rules}``); bad input is one line."""
+    from omegaconf import OmegaConf
+
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.errors import UserError
+    from neurosym_cli.tasks.registry import search_dirs
+
+    hoisted = hoist_flags(args)
+    n_flags = len(hoisted) - len([a for a in args if not a.startswith("-") and a not in _flag_values(args)])
+    overrides = [a for a in hoisted[n_flags:] if not a.startswith(("hydra.", "hydra/", "+hydra", "~hydra"))]
+    dirs = search_dirs(args)
+    try:
+        typed = compose_config(COMMANDS[cmd][0], overrides, str(dirs[0]) if dirs else None)
+    except UserError as e:
+        print(f"neurosym {cmd}: error: {e}", file=sys.stderr)
+        raise SystemExit(2) from None
+    sys.stdout.write(OmegaConf.to_yaml(OmegaConf.structured(typed)))
+
+
+def _flag_values(args: list[str]) -> set[str]:
+    """The arguments that are values of a flag (`--config-dir DIR`, `--cfg job`), not overrides."""
+    out = set()
+    for i, a in enumerate(args[:-1]):
+        if a in _VALUED or (a == "--info" and args[i + 1] in _INFO):
+            out.add(args[i + 1])
+    return out
+
+
 def _complete() -> bool:
     """Bash completion through Hydra's hook: complete the subcommand, then delegate to its app."""
     line = os.environ.get("COMP_LINE", "")
@@ -295,9 +325,9 @@ def _main() -> None:
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
-    if any(a in ("--cfg", "-c") and rest[i + 1:i + 2] == ["job"] for i, a in enumerate(rest)) \
-            and "--resolve" not in rest:
-        rest = [*rest, "--resolve"]  # print `rules: 5`, not `rules: ${task.rules}`: the values the run would use
+    if any(a in ("--cfg", "-c") and rest[i + 1:i + 2] == ["job"] for i, a in enumerate(rest)):
+        print_typed_config(cmd, rest)
+        return
     if any(a in ("-m", "--multirun") for a in rest):
         os.environ["NEUROSYM_SWEPT"] = ",".join(swept_keys(rest))  # read by each job (commands/_run.py)
     sys.argv = [f"neurosym {cmd}", *hoist_flags(rest)]

@@ -348,10 +348,11 @@ def test_bad_overrides_are_one_line(tmp_path, arg, needle):
 
 def test_good_overrides_pass_the_check():
     from neurosym_cli.overrides import check
+    from neurosym_cli.tasks.random_cross import CrossConfig  # task.num_groups is a key of the cross tasks' schema
 
     assert check(["seed=0,1,2", "lam=0.3,0.5", "budget.horizon=null", "task.num_groups=2", "hydra/launcher=joblib",
                   "hydra.launcher.n_jobs=2", "baselines=[tf-full,prog]", "seed=range(0,3)", "-m", "--cfg", "job",
-                  "runs_root='\u00e9t\u00e9'", "synth.backend=torch", "+seed=3"]) is None
+                  "runs_root='\u00e9t\u00e9'", "synth.backend=torch", "+seed=3"], [CrossConfig]) is None
 
 
 def test_rules_and_threads_ranges_in_the_schema():
