@@ -166,7 +166,7 @@ def picks(program: Program, cfg: RunConfig, agent, rel, round: int = 0, seed: in
     import torch
 
     from .dsl.interpret import program_picks
-    from .stages.comm import check_program
+    from .stages.programs import check_program
     from .tasks import Rng
 
     t = task(cfg)

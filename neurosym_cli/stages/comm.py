@@ -5,30 +5,10 @@ from __future__ import annotations
 
 from .. import artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
-from ..dsl.ast import Program
 from ..policy.comm import CommProvider, ProgramComm, TreeComm, comm_module, make_comm, with_link_failure
 from ..dsl.files import load_program
-from ..tasks.features import FeatureMap
+from .programs import check_program, feature_map  # noqa: F401  (re-exported)
 from ..utils.io import ArtifactError, read_json
-
-
-def feature_map(cfg: RunConfig, task=None) -> FeatureMap:
-    """The feature map ``cfg.features`` of the task (built from the config when not given)."""
-    from ..tasks import make_task
-
-    return (task or make_task(cfg.task, cfg.horizon)).features(cfg.features)
-
-
-def check_program(program: Program, cfg: RunConfig, source: str, fmap: FeatureMap | None = None) -> None:
-    """A program runs on this task only with its number of rounds and features of this task's feature map."""
-    if program.n_rounds != cfg.task.rounds:
-        raise ConfigError(f"{source}: the program has {program.n_rounds} round(s), task {cfg.task.name} "
-                          f"{cfg.task.rounds}")
-    known = (fmap or feature_map(cfg)).vocab
-    unknown = known.unknown(program.features())
-    if unknown:
-        raise ConfigError(f"{source}: feature(s) {', '.join(unknown)} not in task {cfg.task.name} with "
-                          f"features={cfg.features}; it has: {', '.join(known.names)}")
 
 
 def baseline_comm(cfg: RunConfig, task=None) -> CommProvider:

@@ -108,7 +108,7 @@ def show_program(cfg: RunConfig) -> dict:
     """The program of ``cfg`` (or ``program=PATH``) with the objective terms from its summary.json, if readable."""
     path = paths.program_file(cfg)
     program = load_program(path, None if cfg.program else paths.synth_command(cfg))
-    from .comm import check_program, feature_map
+    from .programs import check_program, feature_map
 
     fmap = feature_map(cfg)
     check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist

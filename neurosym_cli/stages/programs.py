@@ -1,0 +1,27 @@
+"""A program against its task: the task's feature map and the check that a program reads only its features. No
+torch at import (show-program reads a program without it)."""
+
+from __future__ import annotations
+
+from ..config import ConfigError, RunConfig
+from ..dsl.ast import Program
+from ..tasks.features import FeatureMap
+
+
+def feature_map(cfg: RunConfig, task=None) -> FeatureMap:
+    """The feature map ``cfg.features`` of the task (built from the config when not given)."""
+    from ..tasks import make_task
+
+    return (task or make_task(cfg.task, cfg.horizon)).features(cfg.features)
+
+
+def check_program(program: Program, cfg: RunConfig, source: str, fmap: FeatureMap | None = None) -> None:
+    """A program runs on this task only with its number of rounds and features of this task's feature map."""
+    if program.n_rounds != cfg.task.rounds:
+        raise ConfigError(f"{source}: the program has {program.n_rounds} round(s), task {cfg.task.name} "
+                          f"{cfg.task.rounds}")
+    known = (fmap or feature_map(cfg)).vocab
+    unknown = known.unknown(program.features())
+    if unknown:
+        raise ConfigError(f"{source}: feature(s) {', '.join(unknown)} not in task {cfg.task.name} with "
+                          f"features={cfg.features}; it has: {', '.join(known.names)}")
