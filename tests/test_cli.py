@@ -216,6 +216,8 @@ def test_show_program_needs_no_torch_and_reports_bad_text(tmp_path):
     assert "p.txt:2:28: expected ')'" in p.stderr, p.stderr
     assert "Traceback" not in p.stderr
     prog.write_text("argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41, l))\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert "ask the nearest agent" in p.stdout and "torch imported" not in p.stderr, p.stderr  # the task's words
     p = run(["show-program", f"program={prog}"], tmp_path)
     assert "ask the nearest agent whose bearing (rad) is at least -1.85" in p.stdout
 
