@@ -20,6 +20,7 @@ from typing import Any, Iterable, Sequence
 
 from . import stats
 from .errors import ConfigError, UserError
+from .utils.io import ArtifactError
 
 SHARED = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
 """the metrics every evaluation has (rollout.METRICS, named here so that reading results needs no torch)"""
@@ -100,7 +101,7 @@ def _rows(per_seed: Any, where: str) -> list[dict[str, float]]:
     if not (isinstance(per_seed, list) and per_seed
             and all(isinstance(r, dict) and all(isinstance(r.get(m), (int, float)) for m in SHARED)
                     for r in per_seed)):
-        raise UserError(f"{where} has no per-evaluation-seed rows with {', '.join(SHARED)}; evaluate it again")
+        raise ArtifactError(f"{where} has no per-evaluation-seed rows with {', '.join(SHARED)}; evaluate it again")
     return [{m: float(r[m]) for m in METRICS if isinstance(r.get(m), (int, float))} | {"seed": r.get("seed")}
             for r in per_seed]
 
@@ -117,14 +118,14 @@ def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
             rec = json.loads(sel.read_text())
             pick = {k: rec[k] for k in ("rules", "lam", "features")}
         except (OSError, ValueError, KeyError, TypeError):
-            raise UserError(f"{sel} is not a selection written by `neurosym select`; run it again") from None
+            raise ArtifactError(f"{sel} is not a selection written by `neurosym select`; run it again") from None
     raw = []
     for f in files:
         try:
             m = json.loads(f.read_text())
             raw.append((f, m["baseline"], m["label"], m.get("config") or {}, m["per_seed"]))
         except (OSError, ValueError, KeyError, TypeError):
-            raise UserError(f"{f} is not an evaluation written by `neurosym eval`; delete it and evaluate again") \
+            raise ArtifactError(f"{f} is not an evaluation written by `neurosym eval`; delete it and evaluate again") \
                 from None
     by_baseline: dict[str, list[tuple[str, dict]]] = {}
     for _, b, label, c, _ in raw:
@@ -171,7 +172,7 @@ def from_seed_file(path: Path) -> SeedRun:
                        if k not in ("coarse", "patience")}}  # coarse and patience: the pick's search schedule
         return SeedRun(r["task"], int(r["seed"]), str(path), settings, r.get("pick"), entries)
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
-        raise UserError(f"{path} is not a seed file written by benchmarks/run_seeds.py ({type(e).__name__}: {e})") \
+        raise ArtifactError(f"{path} is not a seed file written by benchmarks/run_seeds.py ({type(e).__name__}: {e})") \
             from None
 
 
