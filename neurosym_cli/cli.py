@@ -38,14 +38,14 @@ EXAMPLES = """examples:
 
 def usage() -> str:
     """`neurosym --help`: the commands, examples, and the choices of each config group, from their one source."""
-    from neurosym_cli.baselines import BASELINES
+    from neurosym_cli.schemes import SCHEMES
 
     lines = ["usage: neurosym <command> [hydra overrides] [hydra flags]", "",
              "Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).", "", "commands:"]
     lines += [f"  {name:<14} {text}" for name, (_, text) in COMMANDS.items()]
     lines += ["", EXAMPLES.rstrip(), ""]
     lines += [f"{group}s: {', '.join(choices(group))}" for group in ("task", "budget")]
-    lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in BASELINES.values()]
+    lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in SCHEMES.values()]
     return "\n".join(lines) + "\n"
 
 
@@ -82,9 +82,9 @@ def _conf_dir():
 def choices(group: str) -> list[str]:
     """The options of a config group: the registered baselines, or the YAML files of conf/<group>/."""
     if group == "baseline":
-        from neurosym_cli.baselines import BASELINES
+        from neurosym_cli.schemes import SCHEMES
 
-        return list(BASELINES)
+        return list(SCHEMES)
     conf = _conf_dir()
     return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
 

@@ -7,7 +7,7 @@ from hydra import compose, initialize_config_module
 from omegaconf import OmegaConf
 
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
-from neurosym_cli.baselines import BASELINES
+from neurosym_cli.schemes import SCHEMES as BASELINES
 from neurosym_cli.config import ConfigError, RunConfig
 from neurosym_cli.envs import ENVS
 

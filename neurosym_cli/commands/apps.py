@@ -12,8 +12,8 @@ import hydra
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
-from ..baselines import BASELINES
 from ..config import TASK_SCHEMAS, RunConfig
+from ..schemes import SCHEMES, default_baselines
 from . import COMMANDS
 
 def fail_suffix(p: float) -> str:
@@ -25,10 +25,12 @@ if not OmegaConf.has_resolver("fail_suffix"):
     OmegaConf.register_new_resolver("fail_suffix", fail_suffix)
 
 _store = ConfigStore.instance()
-_store.store(name="run_schema", node=RunConfig)
+_schema = OmegaConf.structured(RunConfig)
+_schema.baselines = default_baselines()  # the pipeline's default, from the registry (config.py cannot see it)
+_store.store(name="run_schema", node=_schema)
 for _family, _schema in TASK_SCHEMAS.items():  # what a conf/task/*.yaml extends
     _store.store(name=f"{_family}_task_schema", node=_schema)  # no group: not a choice of its own in --help
-for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
+for _b in SCHEMES.values():  # the config group baseline=..., one option per scheme, its class the schema
     _store.store(group="baseline", name=_b.name, node=_b)
 
 

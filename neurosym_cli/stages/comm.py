@@ -1,60 +1,18 @@
-"""The communication provider of a baseline, with its synthesized artifact (program or tree) loaded and checked
-against the task."""
+"""The communication provider of a baseline, built by its scheme (``cfg.baseline``, schemes/) with its synthesized
+artifact (program or tree) loaded and checked against the task, and the weights it runs on."""
 
 from __future__ import annotations
 
 from .. import artifacts, paths
-from ..config import ConfigError, RunConfig, UserError
-from ..dsl.ast import Program
-from ..envs.features import feature_names
-from ..policy.comm import CommProvider, ProgramComm, TreeComm, comm_module, make_comm, with_link_failure
-from ..dsl.files import load_program
-from ..utils.io import ArtifactError, read_json
+from ..config import RunConfig
+from ..policy.comm import CommProvider, comm_module, with_link_failure
+from ..utils.io import ArtifactError
 
 
-def check_program(program: Program, cfg: RunConfig, source: str) -> None:
-    """A program runs on this task only with its number of rounds and features of this task's feature map."""
-    if program.n_rounds != cfg.task.rounds:
-        raise ConfigError(f"{source}: the program has {program.n_rounds} round(s), task {cfg.task.name} "
-                          f"{cfg.task.rounds}")
-    known = feature_names(cfg.task.kind, cfg.task.agents_per_group, cfg.features)
-    unknown = sorted(program.features() - set(known))
-    if unknown:
-        raise ConfigError(f"{source}: feature(s) {', '.join(unknown)} not in task {cfg.task.name} with "
-                          f"features={cfg.features}; it has: {', '.join(known)}")
-
-
-def baseline_comm(cfg: RunConfig) -> CommProvider:
+def baseline_comm(cfg: RunConfig, env=None) -> CommProvider:
     """The provider of ``cfg.baseline`` (a program or tree from the run directory or ``program=``, or a rule), with
     the task's link failure."""
-    return with_link_failure(_provider(cfg), cfg.task.link_failure)
-
-
-def _provider(cfg: RunConfig) -> CommProvider:
-    if cfg.baseline.comm == "program":
-        path = paths.program_file(cfg)
-        program = load_program(path, None if cfg.program else paths.synth_command(cfg))
-        check_program(program, cfg, str(path))
-        return ProgramComm(program, cfg.task.kind, cfg.features)
-    if cfg.baseline.comm == "tree":
-        from ..synth.tree import TreeModel
-
-        path = paths.tree_file(cfg)
-        if not path.exists():
-            raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
-        try:
-            rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
-        except (UserError, KeyError, TypeError, ValueError, IndexError) as e:
-            raise ArtifactError(f"corrupt tree {path} ({e}); `{paths.synth_command(cfg)} "
-                                f"overwrite=true` fits it again") from None
-        if len(rounds) != cfg.task.rounds:
-            raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
-        return TreeComm(rounds, cfg.task.kind, cfg.features)
-    if cfg.baseline.comm == "gated":
-        from ..policy.gated import GatedComm
-
-        return GatedComm(cfg.task.rounds)
-    return make_comm(cfg.baseline.comm, cfg.rules)
+    return with_link_failure(cfg.baseline.provider(cfg, env), cfg.task.link_failure)
 
 
 def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:
@@ -71,15 +29,7 @@ def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:
 
 def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
     """SHA-1 of what a retrained model is retrained under: the program's rules (comments aside) or the tree file."""
-    import hashlib
-
-    from ..dsl.printer import to_text
-
-    if cfg.baseline.comm == "tree":
-        data = paths.tree_file(cfg).read_bytes()
-    else:
-        data = to_text(comm.program).encode()  # type: ignore[attr-defined]
-    return hashlib.sha1(data).hexdigest()
+    return cfg.baseline.artifact_identity(cfg, comm)  # type: ignore[attr-defined]
 
 
 def load_baseline(cfg: RunConfig, device):
@@ -93,11 +43,12 @@ def load_baseline(cfg: RunConfig, device):
         log.warning("the model is only partly trained (step %d); using it anyway; `%s` finishes it",
                     payload["fit"]["step"], paths.train_command(cfg))
     policy = artifacts.policy_from_payload(payload).to(device)
-    comm = baseline_comm(cfg)
+    env = make_env(cfg.task, cfg.horizon)
+    comm = baseline_comm(cfg, env)
     load_gate(comm, payload, paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
     if (gate := comm_module(comm)) is not None:
         gate.to(device)
     if payload.get("made_under") and payload["made_under"] != comm_identity(cfg, comm):
         log.warning("the retrained model was made under another program (or tree) than the one there now; "
                     "`%s overwrite=true` retrains it under this one", paths.retrain_command(cfg))
-    return policy, make_env(cfg.task, cfg.horizon), comm
+    return policy, env, comm

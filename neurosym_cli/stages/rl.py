@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__, paths
-from ..baselines import get
+from ..schemes import get
 from ..config import RunConfig
 from ..utils.console import clock, say
 from ..utils.io import read_json, write_csv, write_json

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__, paths
-from ..baselines import get
+from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_csv, write_json
@@ -115,7 +115,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     from ..utils.seeding import seed_everything
     from .comm import load_baseline
 
-    program = paths.program_file(cfg).read_text() if cfg.baseline.comm == "program" else None
+    program = paths.program_file(cfg).read_text() if cfg.baseline.has_program else None
     model = paths.train_dir(cfg) / "model.pt"
     stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
              "val_seeds": cfg.budget.val_seeds}

@@ -54,7 +54,7 @@ def collect(env: MultiAgentEnv, policy: CommTransformer, rollouts: int, stride: 
                 state = bucket.to(device)
                 for t in range(env.horizon):
                     obs = env.observe(state, rng)
-                    ctx = CommContext(env, state, obs, rng)
+                    ctx = CommContext(env, state, obs, rng, t)
                     out = policy(obs, lambda logits, r: full.select(ctx, logits, r))
                     if t % stride == 0:
                         by_n.setdefault(state.n_agents, []).append(
