@@ -3,7 +3,7 @@ the sparse path (only the K picked pairs computed), side by side in one process.
 
     python benchmarks/bench_comm_paths.py                 # random-grid and random-cross, paper sizes
     python benchmarks/bench_comm_paths.py --episodes 4 --horizon 20   # a quick look
-    python benchmarks/bench_comm_paths.py --tasks random-cross --bucket agents   # N = 40: comm-range's two paths
+    python benchmarks/bench_comm_paths.py --tasks random-cross --set task.group_prob=1   # every episode N = 40
 
 One training step = a rollout of `episodes` episodes over `horizon` steps with gradients, then backward, as in
 `fit` (paper budget: 50 rollouts per batch cut into 4 steps of ~13). The dense column forces the mask path for
@@ -39,24 +39,6 @@ PROGRAMS = {  # the programs the paper-budget searches found on 2026-11-25 (docs
 }
 
 
-class PaddedPicks:
-    """A dense provider's mask handed out as picks padded to the batch's largest degree (-1 = nobody): the sparse
-    path for a variable degree (comm-range)."""
-
-    def __init__(self, inner):
-        self.inner, self.name = inner, inner.name
-
-    def select(self, ctx, logits, r):
-        return self.inner.select(ctx, logits, r)
-
-    def picks(self, ctx, r):
-        mask = self.inner.mask(ctx, r)
-        n = mask.shape[-1]
-        k = int(mask.sum(-1).max())
-        idx = torch.where(mask, torch.arange(n, device=mask.device), n).sort(-1).values[..., :k]
-        return idx.masked_fill(idx == n, -1)
-
-
 class Dense:
     """A provider seen through its mask only (picks withheld): forces the dense path."""
 
@@ -70,17 +52,17 @@ class Dense:
         return None
 
 
-def task_config(name: str) -> TaskConfig:
-    return compose_config("train", [f"task={name}"]).task
+def task_config(name: str, overrides: list[str]) -> TaskConfig:
+    return compose_config("train", [f"task={name}", *overrides]).task
 
 
-def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int, by: str = "batch") -> float:
+def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int) -> float:
     env = make_env(task)
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, task.rounds, ModelConfig())
     g = torch.Generator().manual_seed(0)
     rng = Rng(g, torch.device("cpu"))
-    bucket = max(env.reset(episodes, g), key=lambda b: b.batch if by == "batch" else (b.n_agents, b.batch))
+    bucket = max(env.reset(episodes, g), key=lambda b: b.batch)
     best = float("inf")
     for _ in range(repeats + 1):  # the first is a warm-up
         t0 = time.perf_counter()
@@ -98,17 +80,16 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--json", default="")
-    ap.add_argument("--bucket", choices=("batch", "agents"), default="batch",
-                    help="time the reset's largest bucket (batch) or the one with the most agents (agents)")
+    ap.add_argument("--set", nargs="*", default=[], help="task overrides, e.g. task.group_prob=1 (N = 40 on cross)")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     rows = []
     print("| task | provider | dense s/step | sparse s/step | dense / sparse | vs tf-full |")
     print("|---|---|---:|---:|---:|---:|")
     for name in a.tasks:
-        task = task_config(name)
+        task = task_config(name, a.set)
         horizon = a.horizon or task.horizon
-        full = step_seconds(task, FullComm(), a.episodes, horizon, a.repeats, a.bucket)
+        full = step_seconds(task, FullComm(), a.episodes, horizon, a.repeats)
         rows.append({"task": name, "provider": "full", "dense_s": full})
         print(f"| {name} | tf-full | {full:.3f} | - | - | 1.00 |", flush=True)
         program = ProgramComm(parse(PROGRAMS.get(name, PROGRAMS["random-cross"])), task.kind)
@@ -116,9 +97,9 @@ def main() -> None:
         for label, comm in (("no-comm", NoComm()),
                             (f"dist (K = {task.rules})", NearestComm(task.rules)),
                             ("prog", program), ("expo", expo),
-                            (f"comm-range (r = {near.radius:g}; sparse: padded picks)", PaddedPicks(near))):
-            dense = step_seconds(task, Dense(comm), a.episodes, horizon, a.repeats, a.bucket)
-            sparse = step_seconds(task, comm, a.episodes, horizon, a.repeats, a.bucket)
+                            (f"comm-range (r = {near.radius:g}, padded picks)", near)):
+            dense = step_seconds(task, Dense(comm), a.episodes, horizon, a.repeats)
+            sparse = step_seconds(task, comm, a.episodes, horizon, a.repeats)
             rows.append({"task": name, "provider": label, "dense_s": dense, "sparse_s": sparse})
             print(f"| {name} | {label} | {dense:.3f} | {sparse:.3f} | {dense / sparse:.2f}x | {sparse / full:.2f} |",
                   flush=True)
