@@ -106,7 +106,7 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
 
 
 _PALETTE = ("#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7", "#9c755f",
-            "#7f7f7f", "#17becf", "#8c564b", "#bcbd22", "#393b79")
+            "#7f7f7f", "#17becf", "#393b79", "#bcbd22", "#8c564b")
 
 
 def color(baseline: str) -> str:
