@@ -3,6 +3,7 @@ the sparse path (only the K picked pairs computed), side by side in one process.
 
     python benchmarks/bench_comm_paths.py                 # random-grid and random-cross, paper sizes
     python benchmarks/bench_comm_paths.py --episodes 4 --horizon 20   # a quick look
+    python benchmarks/bench_comm_paths.py --tasks random-cross --set task.group_prob=1   # every episode N = 40
 
 One training step = a rollout of `episodes` episodes over `horizon` steps with gradients, then backward, as in
 `fit` (paper budget: 50 rollouts per batch cut into 4 steps of ~13). The dense column forces the mask path for
@@ -22,10 +23,11 @@ from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import ModelConfig, TaskConfig
 from neurosym_cli.dsl.parser import parse
 from neurosym_cli.tasks import Rng, make_task
-from neurosym_cli.policy import make_comm
+from neurosym_cli.policy import FullComm, NearestComm, NoComm
 from neurosym_cli.policy.comm import ProgramComm
 from neurosym_cli.policy.transformer import CommTransformer
 from neurosym_cli.rollout import rollout
+from neurosym_cli.schemes import get
 
 ROOT = Path(__file__).resolve().parent.parent
 PROGRAMS = {  # the programs the paper-budget searches found on 2026-11-25 (docs/results.md), for realistic picks
@@ -50,8 +52,8 @@ class Dense:
         return None
 
 
-def task_config(name: str) -> TaskConfig:
-    return compose_config("train", [f"task={name}"]).task
+def task_config(name: str, overrides: list[str]) -> TaskConfig:
+    return compose_config("train", [f"task={name}", *overrides]).task
 
 
 def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: int) -> float:
@@ -78,21 +80,24 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--json", default="")
+    ap.add_argument("--set", nargs="*", default=[], help="task overrides, e.g. task.group_prob=1 (N = 40 on cross)")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     rows = []
     print("| task | provider | dense s/step | sparse s/step | dense / sparse | vs tf-full |")
     print("|---|---|---:|---:|---:|---:|")
     for name in a.tasks:
-        task = task_config(name)
+        task = task_config(name, a.set)
         horizon = a.horizon or task.horizon
-        full = step_seconds(task, make_comm("full", task.rules), a.episodes, horizon, a.repeats)
+        full = step_seconds(task, FullComm(), a.episodes, horizon, a.repeats)
         rows.append({"task": name, "provider": "full", "dense_s": full})
         print(f"| {name} | tf-full | {full:.3f} | - | - | 1.00 |", flush=True)
         program = ProgramComm(parse(PROGRAMS.get(name, PROGRAMS["random-cross"])), make_task(task).features("v1"))
-        for label, comm in (("no-comm", make_comm("none", task.rules)),
-                            (f"dist (K = {task.rules})", make_comm("nearest", task.rules)),
-                            ("prog", program)):
+        expo, near = get("expo"), get("comm-range")
+        for label, comm in (("no-comm", NoComm()),
+                            (f"dist (K = {task.rules})", NearestComm(task.rules)),
+                            ("prog", program), ("expo", expo),
+                            (f"comm-range (r = {near.radius:g}, padded picks)", near)):
             dense = step_seconds(task, Dense(comm), a.episodes, horizon, a.repeats)
             sparse = step_seconds(task, comm, a.episodes, horizon, a.repeats)
             rows.append({"task": name, "provider": label, "dense_s": dense, "sparse_s": sparse})

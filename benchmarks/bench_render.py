@@ -21,7 +21,7 @@ from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.dsl.parser import parse as parse_program
 from neurosym_cli.episode import protocol_episode, record_episode
 from neurosym_cli.tasks import make_task
-from neurosym_cli.policy import CommTransformer, make_comm
+from neurosym_cli.policy import CommTransformer, FullComm
 from neurosym_cli.policy.comm import ProgramComm
 from neurosym_cli.viz.animate import animate, episode_png
 
@@ -47,7 +47,7 @@ def main() -> None:
     state, gen, _ = protocol_episode(env, 5)
     out = Path(tempfile.mkdtemp(prefix="neurosym-bench-render-"))
     for name, comm, style in (("prog", ProgramComm(parse_program(PROGRAM), "formation"), "rules"),
-                              ("tf-full", make_comm("full", 5), "weights")):
+                              ("tf-full", FullComm(), "weights")):
         g = torch.Generator().manual_seed(int(gen.initial_seed()))
         t0 = time.perf_counter()
         rec = record_episode(env, policy, comm, state, g, torch.device("cpu"))

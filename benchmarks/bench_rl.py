@@ -23,7 +23,7 @@ import torch
 from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import ModelConfig
 from neurosym_cli.tasks import Rng, make_task
-from neurosym_cli.policy import make_comm
+from neurosym_cli.policy import FullComm
 from neurosym_cli.policy.gated import GatedComm, score_function_loss
 from neurosym_cli.policy.transformer import CommTransformer
 from neurosym_cli.rollout import rollout
@@ -129,7 +129,7 @@ def main() -> None:
     g = torch.Generator().manual_seed(0)
     rng = Rng(g, torch.device("cpu"))
     bucket = max(env.reset(a.episodes, g), key=lambda b: b.batch)
-    comms = {"bptt (oracle, full attention)": make_comm("full", 0), "rl (gate + policy gradient)": GatedComm(task.rounds)}
+    comms = {"bptt (oracle, full attention)": FullComm(), "rl (gate + policy gradient)": GatedComm(task.rounds)}
     times: dict[str, list[float]] = {k: [] for k in comms}
     for r in range(a.repeats + 1):  # the first round is a warm-up
         for name, comm in comms.items():

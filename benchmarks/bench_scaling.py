@@ -32,7 +32,7 @@ def measure(n: int, threads: int) -> dict:
     from neurosym_cli.dsl.ast import Program
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
     from neurosym_cli.tasks import Rng, make_task
-    from neurosym_cli.policy import CommTransformer, make_comm
+    from neurosym_cli.policy import CommTransformer, FullComm
     from neurosym_cli.rollout import rollout
     from neurosym_cli.synth.dataset import collect
     from neurosym_cli.synth.mcmc import metropolis
@@ -55,10 +55,10 @@ def measure(n: int, threads: int) -> dict:
 
     batch = 4
     spec = FitSpec(rollouts=batch, batch=batch, horizon=50, checkpoint_every=10**9)
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)  # warm-up
+    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)  # warm-up
     spec = FitSpec(rollouts=3 * batch, batch=batch, horizon=50, checkpoint_every=10**9)
     t0 = time.perf_counter()
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)
+    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)
     train_s = (time.perf_counter() - t0) / spec.rollouts
     out.update(train_rollouts_per_s=1 / train_s, train_agent_steps_per_s=n * 50 / train_s)
 
@@ -66,7 +66,7 @@ def measure(n: int, threads: int) -> dict:
     t0 = time.perf_counter()
     with torch.no_grad():
         for state in env.reset(batch, gen):
-            rollout(env, pol, make_comm("full", 5), state, Rng(gen, cpu), 50)
+            rollout(env, pol, FullComm(), state, Rng(gen, cpu), 50)
     out["eval_rollouts_per_s"] = batch / (time.perf_counter() - t0)
 
     data = collect(env, pol, 10, 1, torch.Generator().manual_seed(2), cpu)  # 500 states

@@ -22,7 +22,7 @@ from neurosym_cli.config import ModelConfig, OptimConfig
 from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.tasks import Rng, make_task
 from neurosym_cli.evaluation import evaluate, summarize
-from neurosym_cli.policy import make_comm, CommTransformer
+from neurosym_cli.policy import CommTransformer, FullComm
 from neurosym_cli.training import FitSpec, fit
 
 CROSS = CrossConfig(name="random-cross", test_settings=["0", "1", "0-2", "0-1", "0-1-2", "0-1-2-3"])
@@ -62,7 +62,7 @@ def train_rate(batch: int, rollouts: int, lr: float, lr_final: float, clip: floa
     spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(lr=lr, lr_final=lr_final, grad_clip=clip, step_per_bucket=True))  # with one rollout per step: one bucket
     t0 = time.perf_counter()
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), DEVICE, Quiet(), lambda s: None)
+    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), DEVICE, Quiet(), lambda s: None)
     if DEVICE.type == "cuda":
         torch.cuda.synchronize()
     return rollouts / (time.perf_counter() - t0), pol
@@ -122,7 +122,7 @@ def learn(args, out: dict) -> None:
         t0 = time.perf_counter()
         _, pol = train_rate(b, args.learn, lr, lrf, clip)
         wall = time.perf_counter() - t0
-        s = summarize(evaluate(env, pol, make_comm("full", 5), range(20), DEVICE))["cost"]
+        s = summarize(evaluate(env, pol, FullComm(), range(20), DEVICE))["cost"]
         out[f"learn_{name}"] = {"rollouts": args.learn, "wall_s": wall, "eval_loss": s["mean"], "std": s["std"]}
         print(f"  {name:9s}: eval loss {s['mean']:8.2f} ± {s['std']:.2f}   wall {wall / 60:6.1f} min", flush=True)
 

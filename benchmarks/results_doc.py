@@ -49,6 +49,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
+from neurosym_cli.schemes import SCHEMES  # noqa: E402
 from neurosym_cli.stats import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
 
 
@@ -60,6 +61,11 @@ def vocab(task: str, features: str):
 
     cfg = compose_config("show_program", [f"task={task}", f"features={features}"])
     return make_task(cfg.task).features(features).vocab
+
+
+def _has_program(metrics: dict) -> bool:
+    """An evaluation of a baseline that runs under a program (prog, det-prog and their retrainings)."""
+    return getattr(SCHEMES.get(metrics["baseline"]), "has_program", False)
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
@@ -106,7 +112,7 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
         for f in sorted(exp.glob("eval/*/metrics.json")):
             m = json.loads(f.read_text())
             c = m["config"]
-            if c["baseline"]["comm"] == "program":
+            if _has_program(m):
                 if (c["lam"] != (c["task"]["lam"] if lam is None else lam) or c["synth"]["objective"] != objective
                         or not c["synth"].get("own_scores", True) or c.get("program")):
                     continue  # another variant's programs, or a hand-written one
@@ -278,7 +284,7 @@ def collect_noisy(exp: Path) -> None:
                  "lam": sel["lam"], "features": sel["features"]}
     for f in sorted(exp.glob("eval/*/metrics.json")):
         m = json.loads(f.read_text())
-        if m["config"]["baseline"]["comm"] == "program" and not m["label"].endswith("-" + sel["name"]):
+        if _has_program(m) and not m["label"].endswith("-" + sel["name"]):
             continue  # programs of other configurations
         out["baselines"][m["baseline"]] = {
             "label": m["label"],

@@ -28,6 +28,9 @@ import sys
 import time
 from pathlib import Path
 
+from neurosym_cli.schemes import SCHEMES
+from neurosym_cli.schemes.searched import Searched  # runs under a program or a tree
+
 ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("random-cross", "random-grid", "unlabeled-goals")
 PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2"}
@@ -56,7 +59,7 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
         c = m["config"]
         if m["rules"] != pick["rules"] or c.get("program"):
             continue  # another K (the selection's own evaluations of other grid points), or a hand-written program
-        if c["baseline"]["comm"] in ("program", "tree") and (c["lam"] != pick["lam"]
+        if isinstance(SCHEMES.get(m["baseline"]), Searched) and (c["lam"] != pick["lam"]
                                                               or c["features"] != pick["features"]):
             continue
         if m["label"] != m["baseline"] and m["label"].split("-k")[0] != m["baseline"]:

@@ -17,7 +17,7 @@ from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.tasks.random_grid import GridConfig
 from neurosym_cli.tasks import make_task
 from neurosym_cli.evaluation import evaluate, summarize
-from neurosym_cli.policy import CommTransformer, make_comm
+from neurosym_cli.policy import CommTransformer, FullComm
 from neurosym_cli.training import FitSpec, fit
 
 TASKS = {
@@ -57,9 +57,9 @@ def main() -> None:
                 print(f"[{tag}] {m['rollouts']:6d} rollouts  loss {m['loss']:8.2f}  {time.perf_counter() - t0:5.0f} s",
                       flush=True)
 
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), dev, Rep(), lambda s: None)
+    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), dev, Rep(), lambda s: None)
     wall = time.perf_counter() - t0
-    s = summarize(evaluate(env, pol, make_comm("full", 5), range(20), dev))["cost"]
+    s = summarize(evaluate(env, pol, FullComm(), range(20), dev))["cost"]
     print(f"[{tag}] FINAL eval loss {s['mean']:.2f} ± {s['std']:.2f}  train wall {wall:.0f} s", flush=True)
     if a.json:
         with open(a.json, "w") as f:

@@ -3,13 +3,14 @@
 Packages are cut by concept. Import layers, lowest first: a module imports from its own layer and the layers
 below it, never from above (tests/test_layers.py reads this table and checks every import, lazy ones included):
 
-    layer 0: errors verb_config config baselines paths overrides utils stats  errors, schemas, baseline
-                                                 registry, artifact names, override checks, statistics
+    layer 0: errors verb_config config baselines paths utils stats  errors, schemas, what a baseline is (its
+                                                 interface), artifact names, statistics
     layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
-    layer 3: artifacts rollout episode plotting viz   checkpoints; one batched rollout; a recorded episode; figures
-    layer 4: training evaluation synth seeds     the training loop; the evaluation protocol; program search;
-                                                 results across training seeds
+    layer 3: artifacts rollout episode viz       checkpoints; one batched rollout; a recorded episode; pictures
+    layer 4: training evaluation synth schemes plotting overrides seeds  the training loop; the evaluation
+                                                 protocol; program search; the baselines' registry; figures;
+                                                 override checks; results across training seeds
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
     layer 7: cli api                             the console script; the Python API (neurosym.api)

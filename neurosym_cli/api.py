@@ -77,7 +77,7 @@ def _quiet(verbose: bool) -> Iterator[None]:
 
 
 def _with(cfg: RunConfig, cmd: str, baseline: str | None) -> RunConfig:
-    from .baselines import get
+    from .schemes import get
 
     cfg = dataclasses.replace(cfg, cmd=cmd, progress="plain")
     if baseline is not None:
@@ -116,7 +116,7 @@ def synth(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) ->
     c = _with(_selected(cfg), "synth", baseline or ("prog" if cfg.baseline.name == "tf-full" else None))
     with _quiet(verbose):
         synthesize(c, RunInfo(multirun=not verbose))
-    return None if c.baseline.comm == "tree" else load_program(paths.program_file(c), paths.synth_command(c))
+    return load_program(paths.program_file(c), paths.synth_command(c)) if c.baseline.has_program else None
 
 
 def retrain(cfg: RunConfig, baseline: str = "prog-retrained", verbose: bool = False) -> dict:
@@ -166,7 +166,7 @@ def picks(program: Program, cfg: RunConfig, agent, rel, round: int = 0, seed: in
     import torch
 
     from .dsl.interpret import program_picks
-    from .stages.programs import check_program
+    from .tasks.programs import check_program
     from .tasks import Rng
 
     t = task(cfg)

@@ -1,54 +1,111 @@
-"""The baselines of the paper (section 4 and appendix B), listed once (stdlib only, so `neurosym --help` stays fast).
+"""What a baseline is, as an interface (stdlib only, so `neurosym --help` stays fast; imports nothing of the package).
 
-A baseline is the shared transformer plus a communication provider that hands it a mask (``comm``) and the
-weights it runs on (``model``). Everything else is derived from this list: the config group ``baseline=``
-(registered in Hydra's ConfigStore by ``commands/apps.py``), the pipeline's stage graph (``stages/graph.py``),
-the order of every results table, the default of ``baselines=`` and the lists in ``neurosym --help``.
+A baseline is the shared transformer plus a communication scheme: the weights it runs on and the provider that
+hands it a mask each round (paper section 4). Each baseline is a typed config schema, a subclass of
+``BaselineConfig`` in ``schemes/`` registered once in ``schemes.SCHEMES``; the composed ``cfg.baseline`` *is* that
+object, so every layer asks it instead of testing names: ``paths.py`` its directories and commands, the stage
+graph its upstream stages, the stages its provider and artifact, the tables its label.
 """
 
 from __future__ import annotations
 
-from .config import BaselineConfig
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
 
-BASELINES: dict[str, BaselineConfig] = {b.name: b for b in (
-    BaselineConfig("tf-full", "full", model="oracle",
-                   description="the oracle: soft attention over every other agent (paper section 3.1)"),
-    BaselineConfig("hard-attn", "topk", model="oracle",
-                   description="the oracle, each agent hears only its k = rules largest attention logits"),
-    BaselineConfig("dist", "nearest", model="own",
-                   description="a transformer trained and run hearing its k = rules nearest agents"),
-    BaselineConfig("prog", "program", model="oracle",
-                   description="the oracle under the synthesized program's hard attention (section 3.3)"),
-    BaselineConfig("prog-retrained", "program", model="retrained",
-                   description="the full method: the oracle retrained under the program (section 3.5)"),
-    BaselineConfig("det-prog", "program", det=True, model="oracle",
-                   description="like prog, with argmax rules only (appendix B)"),
-    BaselineConfig("det-prog-retrained", "program", det=True, model="retrained",
-                   description="det-prog with the oracle retrained under it (appendix B)"),
-    BaselineConfig("dt", "tree", model="oracle",
-                   description="the oracle under a decision tree imitating a degree-capped hard attention (appendix B)"),
-    BaselineConfig("dt-retrained", "tree", model="retrained",
-                   description="dt with the oracle retrained under the tree (appendix B)"),
-    BaselineConfig("no-comm", "none", model="own",
-                   description="a transformer trained and run with no communication (reference point)"),
-    BaselineConfig("rl", "gated", model="own", pipeline=False,
-                   description="appendix D: whom to hear as actions, by policy gradient (`neurosym rl`: rl1, rl2)"),
-)}
-"""name -> baseline, in the paper's order (the order of every table)."""
+if TYPE_CHECKING:  # for annotations only: config.py imports this module
+    from .config import RunConfig
 
 ORACLE = "tf-full"
 """the baseline whose training makes the oracle that hard-attn, the programs, the trees and retraining start from"""
 
-
-def get(name: str) -> BaselineConfig:
-    """The baseline of that name; an unknown name is a one-line error listing the choices."""
-    from .config import ConfigError
-
-    if name not in BASELINES:
-        raise ConfigError(f"unknown baseline {name!r}; choose one of: {', '.join(BASELINES)}")
-    return BASELINES[name]
+VERBS = ("train", "synth", "retrain", "eval")
+"""the verbs of the stage graph"""
 
 
-def rank(name: str) -> int:
-    """Position of a baseline in the paper's order (unknown names last)."""
-    return list(BASELINES).index(name) if name in BASELINES else len(BASELINES)
+@dataclass(frozen=True)
+class Stage:
+    """One command of the stage graph: ``neurosym <verb> baseline=<baseline>``."""
+
+    verb: str  # train, synth, retrain or eval
+    baseline: str  # the baseline whose config the command runs with
+
+    @property
+    def name(self) -> str:
+        return f"{self.verb} {self.baseline}"
+
+
+@dataclass(frozen=True)
+class Artifact:
+    """What `neurosym synth` writes for a scheme: <exp_dir>/synth/<tag>/<file>."""
+
+    tag: str  # the search's name: K, lambda, feature map and search variant (k2-lam0.5-v1, det-..., dt-k2-v1)
+    file: str  # program.txt (a program in the paper's notation) or tree.json (a decision tree per round)
+
+
+def train_line(cfg: "RunConfig", baseline: str, extra: str = "") -> str:
+    """`neurosym train` of ``baseline`` on ``cfg``'s task, budget and seed, then ``extra`` overrides."""
+    return (f"neurosym train task={cfg.task.name} baseline={baseline} budget={cfg.budget.name} "
+            f"seed={cfg.seed}{extra}")
+
+
+@dataclass
+class BaselineConfig:
+    """A baseline = which weights run and which communication scheme decides the mask (paper section 4). The
+    fields are what every baseline's schema has; a scheme adds its own (``baseline.det``, ``baseline.radius``)."""
+
+    name: str = "???"  # OmegaConf's marker for a mandatory value
+    description: str = ""
+    pipeline: bool = True
+    """made and evaluated by `neurosym pipeline` unless baselines= says otherwise"""
+
+    has_program: ClassVar[bool] = False
+    """runs under a program in the paper's notation (show-program reads it)"""
+    soft_attention: ClassVar[bool] = False
+    """hears every other agent with soft attention weights (tables say "all", pictures draw weights as opacity)"""
+
+    def label(self, cfg: "RunConfig") -> str:
+        """Name of its evaluation directory and its row in the tables (k, a program's tag, where they matter)."""
+        return self.name
+
+    def model_dir(self, cfg: "RunConfig") -> str:
+        """Directory under <exp_dir>/train/ of the weights it runs on."""
+        raise NotImplementedError
+
+    def weights(self) -> Stage:
+        """The stage that makes the weights it runs on."""
+        raise NotImplementedError
+
+    def artifact(self, cfg: "RunConfig") -> Artifact | None:
+        """The synthesized artifact it runs under (program or tree), or None."""
+        return None
+
+    def upstream(self) -> list[Stage]:
+        """Every stage that makes what its evaluation needs, in dependency order."""
+        raise NotImplementedError
+
+    def requires(self, verb: str) -> tuple[Stage, ...]:
+        """The stages its own stage ``verb`` (train, synth or retrain; one of ``upstream()``) waits for."""
+        return ()
+
+    def command(self, verb: str, cfg: "RunConfig") -> str:
+        """The command line of its stage ``verb`` on ``cfg`` (what error messages tell the user to run)."""
+        raise NotImplementedError
+
+    def claims(self, model_dir: str) -> int:
+        """How specifically a train/ directory name is one of its models: the length of the matched name, 0 when
+        it is not (the report names a training curve by the scheme that claims it longest)."""
+        return 0
+
+    def provider(self, cfg: "RunConfig", env: Any = None) -> Any:
+        """Its communication provider (policy/comm.py ``CommProvider``) for ``cfg``, artifact loaded and checked;
+        ``env``, the task, for a scheme whose rule needs it when built (none of the paper's)."""
+        raise NotImplementedError
+
+    def trains_from_oracle(self, cfg: "RunConfig") -> bool:
+        """Its own model starts from the oracle's weights (for budget.retrain_rollouts at optim.retrain_lr)."""
+        return False
+
+    def weights_command(self, cfg: "RunConfig") -> str:
+        """The command line that makes the weights it runs on."""
+        w = self.weights()
+        return train_line(cfg, ORACLE) if w.baseline != self.name else self.command(w.verb, cfg)

@@ -38,14 +38,14 @@ EXAMPLES = """examples:
 
 def usage() -> str:
     """`neurosym --help`: the commands, examples, and the choices of each config group, from their one source."""
-    from neurosym_cli.baselines import BASELINES
+    from neurosym_cli.schemes import SCHEMES
 
     lines = ["usage: neurosym <command> [hydra overrides] [hydra flags]", "",
              "Neurosymbolic transformers for multi-agent communication (NeurIPS 2020).", "", "commands:"]
     lines += [f"  {name:<14} {text}" for name, (_, text) in COMMANDS.items()]
     lines += ["", EXAMPLES.rstrip(), ""]
     lines += [f"{group}s: {', '.join(choices(group))}" for group in ("task", "budget")]
-    lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in BASELINES.values()]
+    lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in SCHEMES.values()]
     return "\n".join(lines) + "\n"
 
 
@@ -83,9 +83,9 @@ def choices(group: str, args: list[str] | None = None) -> list[str]:
     """The options of a config group: the registered baselines; the tasks of the search path (the package's, the
     command line's config directories, installed entry points); or the YAML files of conf/<group>/."""
     if group == "baseline":
-        from neurosym_cli.baselines import BASELINES
+        from neurosym_cli.schemes import SCHEMES
 
-        return list(BASELINES)
+        return list(SCHEMES)
     if group == "task":
         from neurosym_cli.tasks.registry import task_choices
 

@@ -11,6 +11,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
+from .baselines import BaselineConfig
 from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
 from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
@@ -141,30 +142,6 @@ class BudgetConfig:
 
 
 @dataclass
-class BaselineConfig:
-    """A baseline = which model is used and who decides the communication mask (paper section 4)."""
-
-    name: str = MISSING
-    comm: str = "full"
-    """communication provider (policy/comm.py): full, topk (hard-attn), nearest (dist), none (no-comm), program (prog),
-    tree (dt), gated (rl: decisions as actions, policy/gated.py)"""
-    det: bool = False
-    """program baselines: no random rules (det-prog, paper appendix B)"""
-    model: str = "oracle"
-    """which weights: oracle (tf-full, hard-attn, prog), own (trained with this mask: dist, no-comm),
-    retrained (the oracle fine-tuned under the program: prog-retrained, paper section 3.5)"""
-    description: str = ""
-    pipeline: bool = True
-    """made and evaluated by `neurosym pipeline` unless baselines= says otherwise (rl has its own verb)"""
-
-    def __post_init__(self) -> None:
-        _check(self.model in ("oracle", "own", "retrained"),
-               f"baseline.model must be oracle, own or retrained, got {self.model!r}")
-        _check(self.model != "retrained" or self.comm in ("program", "tree"),
-               "a retrained baseline needs comm: program or tree")
-
-
-@dataclass
 class SynthConfig:
     """MCMC program synthesis (paper section 3.4; docs/fidelity.md 'Synthesis')."""
 
@@ -214,12 +191,6 @@ class SynthConfig:
         _check(self.coarse >= 1, f"synth.coarse must be at least 1, got {self.coarse}")
 
 
-def _registered_baselines() -> list[str]:
-    from .baselines import BASELINES  # the registry builds on this module's schemas
-
-    return [name for name, b in BASELINES.items() if b.pipeline]
-
-
 @dataclass
 class RunConfig:
     """Fields shared by every command (conf/_common_.yaml)."""
@@ -254,8 +225,9 @@ class RunConfig:
     logger: str = "csv"
     """run tracking: csv (history.csv, trace.csv: always written) or tensorboard (also event files under
     <exp_dir>/tensorboard; the tensorboard extra)"""
-    baselines: list[str] = field(default_factory=lambda: _registered_baselines())
-    """pipeline: the baselines to make and evaluate, in order (default: every one of baselines.py, paper order)"""
+    baselines: list[str] = field(default_factory=list)
+    """pipeline: the baselines to make and evaluate, in order. Composed, it defaults to every scheme of
+    schemes.SCHEMES made by the pipeline by default, in the paper's order (commands/apps.py fills it in)"""
     task: Any = field(default_factory=dict)
     """the task's own schema (a TaskConfig subclass named by the task class, tasks/registry.py)"""
     model: ModelConfig = field(default_factory=ModelConfig)

@@ -102,10 +102,10 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
     state = state.to(device)
     pos, inputs, masks, attns, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], [], []
     dist_c = float(getattr(getattr(env, "cfg", None), "collision_dist", 0.0))
-    for _ in range(horizon):
+    for t in range(horizon):
         obs = env.observe(state, rng)
         inputs.append(obs.agent[0].cpu())
-        ctx = CommContext(env, state, obs, rng)
+        ctx = CommContext(env, state, obs, rng, t)
         rec.picked.clear()
         out = policy(obs, lambda logits, r: rec.select(ctx, logits, r), lambda r: rec.picks(ctx, r))
         state = env.step(state, out.action)

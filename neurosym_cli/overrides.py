@@ -9,6 +9,7 @@ import difflib
 import re
 
 from .config import RunConfig, TaskConfig
+from .schemes import SCHEMES
 
 _SCHEMAS = {f.name: type(f.default_factory()) for f in dataclasses.fields(RunConfig)  # type: ignore[misc]
             if f.name != "task" and f.default_factory is not dataclasses.MISSING
@@ -35,6 +36,8 @@ def known_keys(task_schemas: list[type] | None = None) -> dict[str, str]:
         keys.update({f"{section}.{k}": t for k, t in _fields(_SCHEMAS[section]).items()})
     for schema in task_schemas or [TaskConfig]:
         keys.update({f"task.{k}": t for k, t in _fields(schema).items()})
+    for scheme in SCHEMES.values():  # a scheme's own fields (baseline.det, baseline.radius)
+        keys.update({f"baseline.{k}": t for k, t in _fields(type(scheme)).items()})
     return keys
 
 

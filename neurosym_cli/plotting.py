@@ -12,9 +12,9 @@ from .viz.draw import save_figure
 def baseline_of(label: str) -> str:
     """The baseline an evaluation label belongs to (``prog-retrained-k2-lam0.5-v1`` -> ``prog-retrained``, the picks
     ``rl1``, ``rl2`` -> ``rl``)."""
-    from .baselines import BASELINES
+    from .schemes import SCHEMES
 
-    names = [b for b in BASELINES if label == b or label.startswith(b + "-")
+    names = [b for b in SCHEMES if label == b or label.startswith(b + "-")
              or (label.startswith(b) and label[len(b):].isdigit())]
     return max(names, key=len) if names else label
 
@@ -65,7 +65,9 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     colors = [color(baseline_of(lbl)) for lbl in labels]
     y = np.arange(len(rows))[::-1]  # the paper's order from the top
     get = lambda m, k: np.array([r[1][m][k] for r in rows], dtype=float)
-    hears_all = [baseline_of(lbl) == "tf-full" for lbl in labels]
+    from .schemes import SCHEMES
+
+    hears_all = [getattr(SCHEMES.get(baseline_of(lbl)), "soft_attention", False) for lbl in labels]
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(13.5, 0.34 * len(rows) + 2.6), dpi=120,
                                   gridspec_kw={"width_ratios": [1, 1, 1.25]})
     a.barh(y, get("cost", "mean"), xerr=get("cost", err), color=colors, capsize=2)
@@ -106,12 +108,12 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
 
 
 _PALETTE = ("#4e79a7", "#f28e2b", "#e15759", "#76b7b2", "#59a14f", "#edc948", "#b07aa1", "#ff9da7", "#9c755f",
-            "#7f7f7f", "#17becf", "#8c564b")
+            "#7f7f7f", "#17becf", "#393b79", "#bcbd22", "#8c564b")
 
 
 def color(baseline: str) -> str:
     """One colour per baseline, the same in every figure (by its place in the paper's order)."""
-    from .baselines import rank
+    from .schemes import rank
 
     return _PALETTE[rank(baseline) % len(_PALETTE)]
 

@@ -65,11 +65,11 @@ def rollout(
     costs, records, decisions = [], [], []
     extra: dict[str, list[Tensor]] = {}
     pop = getattr(comm, "pop_step", None)  # providers whose decisions are actions (policy/gated.py)
-    for _ in range(horizon):
+    for t in range(horizon):
         if detach_state:
             state = state.detach()
         obs = env.observe(state, rng)
-        ctx = CommContext(env, state, obs, rng)
+        ctx = CommContext(env, state, obs, rng, t)
         out = policy(obs, lambda logits, r: comm.select(ctx, logits, r), lambda r: comm.picks(ctx, r))
         state = env.step(state, out.action)
         costs.append(env.cost(state, out.action))

@@ -237,8 +237,8 @@ class Summary:
 
 
 def order(keys: Iterable[str]) -> list[str]:
-    """Rows in the paper's order (baselines.BASELINES), other labels after their baseline."""
-    from .baselines import BASELINES
+    """Rows in the paper's order (schemes.SCHEMES), other labels after their baseline."""
+    from .schemes import SCHEMES as BASELINES
 
     names = list(BASELINES)
 

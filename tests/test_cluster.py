@@ -157,7 +157,7 @@ def test_training_curves_from_histories(tmp_path):
 
 
 def test_one_colour_per_baseline():
-    from neurosym_cli.baselines import BASELINES
+    from neurosym_cli.schemes import SCHEMES as BASELINES
     from neurosym_cli.plotting import baseline_of, color
 
     assert len({color(b) for b in BASELINES}) == len(BASELINES)

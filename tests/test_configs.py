@@ -6,7 +6,7 @@ import pytest
 from hydra import compose, initialize_config_module
 
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
-from neurosym_cli.baselines import BASELINES
+from neurosym_cli.schemes import SCHEMES as BASELINES
 from neurosym_cli.config import ConfigError, RunConfig
 from neurosym_cli.commands._run import typed_config
 from neurosym_cli.tasks import task_class

@@ -55,11 +55,11 @@ def test_recorded_episodes_are_the_evaluation_protocols_episodes():
 
 def test_soft_attention_rows_sum_to_one_and_program_rows_have_at_most_k():
     from neurosym_cli.episode import protocol_episode, record_episode
-    from neurosym_cli.policy import make_comm
+    from neurosym_cli.policy import FullComm
 
     env, policy = _setup()
     state, gen, _ = protocol_episode(env, 1)  # both groups: N = 8
-    full = record_episode(env, policy, make_comm("full", 2), state, gen, torch.device("cpu"))
+    full = record_episode(env, policy, FullComm(), state, gen, torch.device("cpu"))
     assert full.attn.shape == (12, 1, 8, 8)
     assert np.allclose(full.attn.sum(-1), 1.0, atol=1e-5)
     assert np.all(np.diagonal(full.attn, axis1=-2, axis2=-1) == 0)

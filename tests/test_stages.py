@@ -2,7 +2,7 @@
 
 import pytest
 
-from neurosym_cli.baselines import BASELINES, get, rank
+from neurosym_cli.schemes import SCHEMES as BASELINES, get, rank
 from neurosym_cli.config import ConfigError
 from neurosym_cli.stages.graph import Stage, plan, requires, upstream
 
@@ -30,8 +30,8 @@ def test_full_plan_has_one_synth_per_search_and_one_retrain_per_retrained_baseli
     stages = plan(list(BASELINES))
     assert sorted(s.baseline for s in stages if s.verb == "synth") == ["det-prog", "dt", "prog"]
     assert sorted(s.baseline for s in stages if s.verb == "retrain") == sorted(
-        n for n, b in BASELINES.items() if b.model == "retrained")
-    assert sorted(s.baseline for s in stages if s.verb == "train") == ["dist", "no-comm", "rl", "tf-full"]
+        n for n, b in BASELINES.items() if b.weights().verb == "retrain")
+    assert sorted(s.baseline for s in stages if s.verb == "train") == ["comm-range", "dist", "expo", "no-comm", "rl", "tf-full"]
     # rl starts from the oracle (rl.init=oracle): its training waits for the oracle's
     assert Stage("train", "tf-full") in requires(Stage("train", "rl"))
     assert stages.index(Stage("train", "tf-full")) < stages.index(Stage("train", "rl"))
@@ -42,4 +42,4 @@ def test_unknown_baseline_is_a_config_error_that_lists_the_choices():
         get("tf-ful")
     with pytest.raises(ConfigError):
         plan(["prog", "nope"])
-    assert rank("tf-full") == 0 and rank("rl") == len(BASELINES) - 1 and rank("nope") == len(BASELINES)
+    assert rank("tf-full") == 0 and rank("comm-range") == len(BASELINES) - 1 and rank("nope") == len(BASELINES)

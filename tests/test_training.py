@@ -10,7 +10,7 @@ from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.tasks.random_grid import GridConfig
 from neurosym_cli.tasks import make_task
 from neurosym_cli.evaluation import evaluate, summarize
-from neurosym_cli.policy import CommTransformer, make_comm
+from neurosym_cli.policy import CommTransformer, FullComm
 from neurosym_cli.training import FitSpec, FitState, fit
 
 SMALL = CrossConfig(name="two-groups-cross", num_groups=2, horizon=30, test_settings=["0", "1", "0-1"])
@@ -30,7 +30,7 @@ def _policy(env):
 def test_loss_falls_on_a_small_case():
     env = make_task(SMALL)
     pol = _policy(env)
-    comm = make_comm("full", 2)
+    comm = FullComm()
     before = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
     spec = FitSpec(rollouts=16 * 25, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3))
     state = fit(pol, env, comm, spec, torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
@@ -46,7 +46,7 @@ def test_loss_falls_on_a_small_case():
 def test_resume_reproduces_an_uninterrupted_run():
     env = make_task(SMALL)
     spec = FitSpec(rollouts=4 * 4, batch=4, horizon=10, checkpoint_every=2)
-    comm = make_comm("full", 2)
+    comm = FullComm()
     straight = _policy(env)
     fit(straight, env, comm, spec, torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
 
@@ -76,7 +76,7 @@ def test_step_per_bucket_takes_one_adam_step_per_bucket():
     gen = torch.Generator().manual_seed(0)
     spec = FitSpec(rollouts=24, batch=24, horizon=5, optim=OptimConfig(step_per_bucket=True))
     n_buckets = len(env.reset(24, torch.Generator().manual_seed(0)))
-    st = fit(pol, env, make_comm("full", 2), spec, gen, torch.device("cpu"), Quiet(), lambda s: None)
+    st = fit(pol, env, FullComm(), spec, gen, torch.device("cpu"), Quiet(), lambda s: None)
     adam_steps = int(next(iter(st.optimizer["state"].values()))["step"])
     assert st.step == 1 and adam_steps == n_buckets > 1
 
@@ -90,7 +90,7 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
 
     env = make_task(SMALL)
     pol = _policy(env)
-    full = make_comm("full", 2)
+    full = FullComm()
     fit(pol, env, full, FitSpec(rollouts=16 * 20, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3)),
         torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
     prog = ProgramComm(parse("random(filter(d >= 3.0, l))\n"), env.features("v1"))
@@ -114,7 +114,7 @@ def test_min_steps_per_batch_splits_single_n_batches():
     for k, expect in ((1, 3), (4, 12)):
         pol = _policy(env)
         spec = FitSpec(rollouts=24, batch=8, horizon=5, optim=OptimConfig(min_steps_per_batch=k))
-        state = fit(pol, env, make_comm("full", 2), spec, torch.Generator().manual_seed(0), torch.device("cpu"),
+        state = fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), torch.device("cpu"),
                     Quiet(), lambda s: None)
         adam_steps = next(iter(state.optimizer["state"].values()))["step"]
         assert int(adam_steps) == expect

@@ -12,8 +12,8 @@ import hydra
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
-from ..baselines import BASELINES
 from ..config import RunConfig
+from ..schemes import SCHEMES, default_baselines
 from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
 
@@ -26,10 +26,12 @@ if not OmegaConf.has_resolver("fail_suffix"):
     OmegaConf.register_new_resolver("fail_suffix", fail_suffix)
 
 _store = ConfigStore.instance()
-_store.store(name="run_schema", node=RunConfig)
+_schema = OmegaConf.structured(RunConfig)
+_schema.baselines = default_baselines()  # the pipeline's default, from the registry (config.py cannot see it)
+_store.store(name="run_schema", node=_schema)
 for _name, _target in entry_point_tasks().items():  # installed packages' tasks: task=<name> (tasks/registry.py)
     _store.store(group="task", name=_name, node={"_target_": _target, "name": _name})
-for _b in BASELINES.values():  # the config group baseline=..., one option per registered baseline
+for _b in SCHEMES.values():  # the config group baseline=..., one option per scheme, its class the schema
     _store.store(group="baseline", name=_b.name, node=_b)
 
 

@@ -14,7 +14,6 @@ from typing import Protocol
 import torch
 from torch import Tensor
 
-from ..config import ConfigError
 from ..dsl.ast import Program
 from ..dsl.interpret import picks_to_mask, program_picks
 from ..tasks.base import Observation, Rng, Task, TaskState, eye_mask, require
@@ -29,6 +28,9 @@ class CommContext:
     state: TaskState
     obs: Observation
     rng: Rng
+    step: int = 0
+    """the time step t of the episode (0 where there is none, e.g. a single probe); schemes that change with time
+    read it (expo: ExpoComm's exponential graph cycles with t)"""
 
 
 class CommProvider(Protocol):
@@ -186,15 +188,3 @@ def with_link_failure(comm: CommProvider, p: float) -> CommProvider:
     """``comm`` unchanged at p = 0 (no extra random draws: results stay bit-identical), else wrapped."""
     return LinkFailure(comm, p) if p > 0 else comm
 
-
-def make_comm(kind: str, k: int) -> CommProvider:
-    """Provider by name (``baseline.comm``); k = rules for the degree-limited ones."""
-    if kind == "full":
-        return FullComm()
-    if kind == "none":
-        return NoComm()
-    if kind == "topk":
-        return TopKComm(k)
-    if kind == "nearest":
-        return NearestComm(k)
-    raise ConfigError(f"unknown communication provider {kind!r}; known: full, none, topk, nearest")

@@ -10,7 +10,8 @@ import time
 from pathlib import Path
 
 from .. import paths
-from ..baselines import ORACLE, get
+from ..baselines import ORACLE
+from ..schemes import with_run
 from ..config import RunConfig
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_json
@@ -26,7 +27,7 @@ RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": eval
 
 def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage) -> tuple[RunConfig, RunInfo]:
     """The pipeline's config with the stage's command and baseline (what `neurosym <verb> baseline=B` composes)."""
-    b = get(stage.baseline)
+    b = with_run(cfg, stage.baseline)
     return dataclasses.replace(cfg, cmd=stage.verb, baseline=b), RunInfo(info.multirun, info.log_dir)
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 from .. import paths
-from ..baselines import get
+from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
 from ..tasks import make_task
@@ -43,7 +43,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
         raise ConfigError(f"render.round={cfg.render.round}, but {cfg.task.name} has {cfg.task.rounds} round(s)")
     rec, title = record(cfg)
     out = paths.render_dir(cfg)
-    style = edge_style(rec, cfg.baseline.comm)
+    style = edge_style(rec, cfg.baseline)
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
     try:
         anim, frames = animate(rec, out / f"episode{cfg.episode}.{cfg.render.format}", title + round_note, style,
@@ -58,7 +58,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
 
 
 def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
-    return dataclasses.replace(cfg, baseline=get(name))
+    return dataclasses.replace(cfg, baseline=with_run(cfg, name))
 
 
 def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, EpisodeRecord]]:

@@ -1,11 +1,11 @@
 """Evaluations read back: every baseline evaluated in one run directory, or aggregated over the training seeds of
-a (task, budget), in the paper's order (``baselines.BASELINES``), as tables and Figure-2-style plots."""
+a (task, budget), in the paper's order (``schemes.SCHEMES``), as tables and Figure-2-style plots."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from .. import baselines
+from .. import schemes
 from ..config import RunConfig
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
@@ -44,19 +44,8 @@ def collect(exp_dir: Path) -> Rows:
     """Every baseline evaluated in an experiment directory, in the paper's order (summaries over its evaluation
     seeds: mean, std, ci95 = the 95 % t half-width)."""
     found = [_metrics(f) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
-    found.sort(key=lambda m: (baselines.rank(m["baseline"]), m["label"]))
+    found.sort(key=lambda m: (schemes.rank(m["baseline"]), m["label"]))
     return [(m["label"], _eval_interval(m)) for m in found]
-
-
-def _model_baseline(model: str) -> tuple[str, bool]:
-    """A train/ directory name -> (baseline it makes, retrained?): oracle is tf-full's, retrained-* a retraining."""
-    if model == "oracle":
-        return baselines.ORACLE, False
-    if model.startswith("retrained-"):
-        tag = model.removeprefix("retrained-")
-        return ("det-prog-retrained" if tag.startswith("det-") else "dt-retrained" if tag.startswith("dt-")
-                else "prog-retrained"), True
-    return model.rsplit("-k", 1)[0] if model.rsplit("-k", 1)[0] in baselines.BASELINES else model, False
 
 
 def histories(root: Path) -> list[tuple[str, str, bool, list[list[tuple[float, float]]]]]:
@@ -77,11 +66,11 @@ def histories(root: Path) -> list[tuple[str, str, bool, list[list[tuple[float, f
             runs.setdefault(f.parent.name, []).append(h)
     out = []
     for model, hs in runs.items():
-        baseline, retrained = _model_baseline(model)
+        baseline, retrained = schemes.model_baseline(model)
         label = "tf-full (the oracle)" if model == "oracle" else (
             f"{baseline} {model.removeprefix('retrained-')}" if retrained else model)
         out.append((label, baseline, retrained, hs))
-    out.sort(key=lambda r: (r[2], baselines.rank(r[1]), r[0]))
+    out.sort(key=lambda r: (r[2], schemes.rank(r[1]), r[0]))
     return out
 
 

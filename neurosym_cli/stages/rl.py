@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__, paths
-from ..baselines import get
+from ..schemes import get
 from ..config import RunConfig
 from ..stats import mean_ci
 from ..utils.console import clock, say

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__, paths
-from ..baselines import get
+from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
@@ -96,7 +96,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     from ..utils.seeding import seed_everything
     from .comm import load_baseline
 
-    program = paths.program_file(cfg).read_text() if cfg.baseline.comm == "program" else None
+    program = paths.program_file(cfg).read_text() if cfg.baseline.has_program else None
     model = paths.train_dir(cfg) / "model.pt"
     stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
              "val_seeds": cfg.budget.val_seeds}

@@ -11,7 +11,7 @@ from rich.panel import Panel
 from rich.table import Table
 
 from .. import paths
-from ..config import RunConfig
+from ..config import ConfigError, RunConfig
 from ..dsl.ast import Program, rule_features
 from ..dsl.vocabulary import FeatureSet
 from ..dsl.printer import describe, rule_text
@@ -106,9 +106,12 @@ def hall_of_fame(hall: dict, lam: float | None, name: str) -> None:
 
 def show_program(cfg: RunConfig) -> dict:
     """The program of ``cfg`` (or ``program=PATH``) with the objective terms from its summary.json, if readable."""
+    if not cfg.program and not cfg.baseline.has_program:
+        raise ConfigError(f"baseline {cfg.baseline.name} runs under no program; show-program reads those of "
+                          "baseline=prog, det-prog and their retrainings, or program=PATH")
     path = paths.program_file(cfg)
     program = load_program(path, None if cfg.program else paths.synth_command(cfg))
-    from .programs import check_program, feature_map
+    from ..tasks.programs import check_program, feature_map
 
     fmap = feature_map(cfg)
     check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist

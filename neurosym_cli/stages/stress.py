@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import paths
-from ..baselines import get
+from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import clock, log, say
 from ..utils.io import write_csv, write_json
@@ -62,7 +62,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     results: list[dict[str, Any]] = []
     skipped: dict[str, str] = {}
     for name in cfg.stress.baselines:
-        b = dataclasses.replace(cfg, baseline=get(name), cmd="eval")
+        b = dataclasses.replace(cfg, baseline=with_run(cfg, name), cmd="eval")
         label = paths.baseline_label(b)
         done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:

@@ -21,11 +21,10 @@ from ..utils.console import SearchDisplay, log, say, use_rich
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.tracking import open_tracker
-from ..dsl.files import load_program, save_program
+from ..dsl.files import save_program
 from ..utils.io import read_json, write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
-from .comm import baseline_comm
 from .show import render
 
 
@@ -36,23 +35,22 @@ SEARCH_SCALARS = ("objective", "current", "best", "best_l1", "best_degree", "acc
 def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
     """Search the program (or fit the tree) of ``cfg``, unless the run directory has it already (overwrite=true
     searches again). Outside sweeps, a new program is shown with its readings."""
-    if cfg.baseline.comm not in ("program", "tree"):
+    artifact = cfg.baseline.artifact(cfg)
+    if artifact is None:
         raise ConfigError(f"synth makes programs (baseline=prog, det-prog) or trees (baseline=dt), "
                           f"not {cfg.baseline.name}")
     if cfg.program:
         raise ConfigError("synth writes its program into the run directory; program= is for eval, retrain and "
                           "show-program")
     out = paths.synth_dir(cfg)
-    result = out / ("tree.json" if cfg.baseline.comm == "tree" else "program.txt")
+    result = out / artifact.file
     if result.exists() and (out / "summary.json").exists() and not cfg.overwrite:
-        if cfg.baseline.comm == "program":
-            load_program(result, paths.synth_command(cfg))  # a corrupt result is an error, never "already done"
-        else:
-            baseline_comm(cfg)  # the same check for a tree
+        cfg.baseline.provider(cfg)  # a corrupt result is an error, never "already done"
         log.info("already synthesized: %s (overwrite=true searches again)", result)
         return {"program": str(result), **_terms(out / "summary.json")}
     with run_lock(out):
-        return _synthesize_locked(cfg, info, out)
+        policy, env, data, device = collect_dataset(cfg)
+        return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device, out)
 
 
 def _terms(summary: Path) -> dict:
@@ -74,13 +72,6 @@ def collect_dataset(cfg: RunConfig):
     data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
                            cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
     return policy, env, data, device
-
-
-def _synthesize_locked(cfg: RunConfig, info: RunInfo, out: Path) -> dict:
-    policy, env, data, device = collect_dataset(cfg)
-    if cfg.baseline.comm == "tree":
-        return fit_trees(cfg, info, policy, data, out)
-    return search_program(cfg, info, policy, env, data, device, out)
 
 
 def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
@@ -162,7 +153,8 @@ def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
     return {by: [row(*x) for x in res.hall.front(by)] for by in ("complexity", "degree")}
 
 
-def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out: Path) -> dict:
+def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
+              out: Path) -> dict:
     """dt (appendix B): per round, label every pair of D by the greedy global hard attention with in- and
     out-degree <= K from the oracle's soft attention, then fit a tree on the pair features."""
     from ..synth.tree import fit_tree, greedy_hard_attention, soft_attention
@@ -194,3 +186,7 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, data: list[DataBucket], out
                                       "config": cfg.record()})
     say(f"[green]fitted[/] {out / 'tree.json'}")
     return {"tree": str(out / "tree.json")}
+
+
+SYNTHESIZERS = {"program.txt": search_program, "tree.json": fit_trees}
+"""what `synth` runs to make each kind of artifact a scheme names (``Artifact.file``, schemes/searched.py)"""

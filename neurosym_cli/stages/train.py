@@ -13,8 +13,9 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
+from ..schemes import with_run
 from ..tasks import make_task, probe
-from ..policy import CommTransformer, make_comm
+from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
@@ -54,42 +55,29 @@ def check_compatible(saved: dict, cfg: RunConfig, path) -> None:
 
 def train(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym train`: the oracle (tf-full, also the weights of hard-attn and the program baselines) with full soft
-    attention, or a baseline with its own model (dist, no-comm) trained under its own mask."""
-    if cfg.baseline.model == "retrained":
-        raise ConfigError(f"{cfg.baseline.name} is made by `neurosym retrain`, not `neurosym train`")
-    if cfg.baseline.model == "oracle" and cfg.baseline.name != "tf-full":
+    attention, or a baseline with its own model (dist, no-comm, rl, ...) trained under its own mask; rl (paper
+    appendix D) trains its gate with it, the motion by backpropagation, the decisions by policy gradient."""
+    weights = cfg.baseline.weights()
+    if weights.verb != "train":
+        raise ConfigError(f"{cfg.baseline.name} is made by `neurosym {weights.verb}`, not `neurosym train`")
+    maker = with_run(cfg, weights.baseline)  # the scheme whose model this is: tf-full's for those on the oracle
+    if maker is not cfg.baseline:
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
-    if cfg.baseline.comm == "gated":
-        return train_rl(cfg, info)
     env = make_task(cfg.task, cfg.horizon)
     probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
-    comm = with_link_failure(make_comm("full" if cfg.baseline.model == "oracle" else cfg.baseline.comm, cfg.rules),
-                             cfg.task.link_failure)
+    comm = with_link_failure(maker.provider(cfg, env), cfg.task.link_failure)
+    if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
+        payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+        return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
+                         lambda: artifacts.policy_from_payload(payload), "train", lr=cfg.optim.retrain_lr)
     return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
                      lambda: CommTransformer.for_task(env, cfg.model), "train")
-
-
-def train_rl(cfg: RunConfig, info: RunInfo) -> dict:
-    """The rl baseline (paper appendix D): the transformer and its communication gate trained together, the motion
-    by backpropagation, the decisions by policy gradient on the cost plus rl.cost times the degree. From the oracle
-    (rl.init=oracle) for budget.retrain_rollouts at the retraining rate, or from scratch for the oracle's budget."""
-    env = make_task(cfg.task, cfg.horizon)
-    probe(env, cfg.task.name)
-    comm = baseline_comm(cfg, env)
-    if cfg.rl.init == "oracle":
-        payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
-        init, rollouts, lr = (lambda: artifacts.policy_from_payload(payload)), cfg.budget.retrain_rollouts, \
-            cfg.optim.retrain_lr
-    else:
-        init, rollouts, lr = (lambda: CommTransformer.for_task(env, cfg.model)), \
-            cfg.budget.train_rollouts, None
-    return train_run(cfg, info, env, comm, rollouts, init, "train", lr=lr)
 
 
 def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym retrain`: every weight of the oracle fine-tuned under the program's (or tree's) hard attention;
     random rules draw from the training generator every step (section 3.5)."""
-    if cfg.baseline.model != "retrained":
+    if cfg.baseline.weights().verb != "retrain":
         raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
                           f"not {cfg.baseline.name}")
     env = make_task(cfg.task, cfg.horizon)
@@ -98,7 +86,6 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
                      lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
                      made_under=comm_identity(cfg, comm))
-
 
 
 def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: int,

@@ -54,7 +54,7 @@ def collect(env: Task, policy: CommTransformer, rollouts: int, stride: int, gen:
                 state = bucket.to(device)
                 for t in range(env.horizon):
                     obs = env.observe(state, rng)
-                    ctx = CommContext(env, state, obs, rng)
+                    ctx = CommContext(env, state, obs, rng, t)
                     out = policy(obs, lambda logits, r: full.select(ctx, logits, r))
                     if t % stride == 0:
                         by_n.setdefault(state.n_agents, []).append(

@@ -18,12 +18,12 @@ from ..episode import EpisodeRecord
 from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
-def edge_style(rec: EpisodeRecord, comm: str) -> str:
+def edge_style(rec: EpisodeRecord, baseline) -> str:
     """How a frame draws a provider's edges: "rules" (coloured by rule, programs), "weights" (opacity = attention
-    weight, soft attention) or "mask" (plain); ``comm`` is the baseline's provider kind (program, full, ...)."""
-    if comm == "program" and rec.picks is not None:
+    weight, soft attention) or "mask" (plain); ``baseline`` is the episode's scheme (``cfg.baseline``)."""
+    if baseline.has_program and rec.picks is not None:
         return "rules"
-    return "weights" if comm == "full" else "mask"
+    return "weights" if baseline.soft_attention else "mask"
 
 
 def _edges(rec: EpisodeRecord, t: int, r: int, style: str, rules: np.ndarray | None):

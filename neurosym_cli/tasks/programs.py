@@ -1,18 +1,23 @@
-"""A program against its task: the task's feature map and the check that a program reads only its features. No
-torch at import (show-program reads a program without it)."""
+"""A run's task and a program against it: the task's feature map, and the check that a program reads only its
+features. No torch at import (show-program reads a program without it)."""
 
 from __future__ import annotations
 
 from ..config import ConfigError, RunConfig
 from ..dsl.ast import Program
-from ..tasks.features import FeatureMap
+from .features import FeatureMap
+
+
+def task_of(cfg: RunConfig, task=None):
+    """``task``, or the task of ``cfg`` built from its config when not given."""
+    from .registry import make_task
+
+    return task if task is not None else make_task(cfg.task, cfg.horizon)
 
 
 def feature_map(cfg: RunConfig, task=None) -> FeatureMap:
     """The feature map ``cfg.features`` of the task (built from the config when not given)."""
-    from ..tasks import make_task
-
-    return (task or make_task(cfg.task, cfg.horizon)).features(cfg.features)
+    return task_of(cfg, task).features(cfg.features)
 
 
 def check_program(program: Program, cfg: RunConfig, source: str, fmap: FeatureMap | None = None) -> None:

@@ -1,0 +1,198 @@
+"""Baselines that run under a synthesized artifact: a program in the paper's notation (prog, det-prog; sections
+3.2-3.4, appendix B) or a decision tree (dt, appendix B), on the oracle's weights or retrained under it
+(prog-retrained, det-prog-retrained, dt-retrained; section 3.5). `neurosym synth` writes the artifact."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import paths
+from ..baselines import ORACLE, Artifact, Stage
+from ..errors import ConfigError
+from .families import OnOracle, Retrained
+
+if TYPE_CHECKING:
+    from ..config import RunConfig
+
+VERB_DEFAULTS = {"synth": "prog", "retrain": "prog-retrained"}
+"""the baseline conf/synth.yaml and conf/retrain.yaml compose: their command lines need no baseline= for it"""
+
+
+def user_program_tag(cfg: "RunConfig") -> str | None:
+    """'file-<stem>-<8 hex of its SHA-1>-<features>' for a program given as program=PATH, else None: results of a
+    hand-written program never take the name (and overwrite the results) of a synthesized one, and two different
+    files never share one."""
+    if not cfg.program:
+        return None
+    path = Path(cfg.program)
+    try:
+        digest = hashlib.sha1(path.read_bytes()).hexdigest()[:8]
+    except OSError:  # missing or unreadable: loading it reports that in one line
+        digest = "unreadable"
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem)[:40] or "program"
+    return f"file-{stem}-{digest}-{cfg.features}"
+
+
+def search_variants(cfg: "RunConfig") -> list[tuple[str, str]]:
+    """(name suffix, override) for each way a program's search differs from the default: the reference's hinge
+    objective, scores kept to the other agent's features, ..."""
+    out = []
+    if cfg.synth.objective != "paper":
+        out.append((f"-{cfg.synth.objective}", f" synth.objective={cfg.synth.objective}"))
+    if not cfg.synth.own_scores:
+        out.append(("-otherscores", " synth.own_scores=false"))
+    if not cfg.synth.simplify:
+        out.append(("-unsimplified", " synth.simplify=false"))
+    if cfg.synth.coarse > 1:
+        out.append((f"-coarse{cfg.synth.coarse}", f" synth.coarse={cfg.synth.coarse}"))
+    if cfg.synth.patience:
+        out.append((f"-patience{cfg.synth.patience}", f" synth.patience={cfg.synth.patience}"))
+    return out
+
+
+def search_tag(cfg: "RunConfig") -> str:
+    """K, lambda, feature map and search variant of a synthesized program (or a hand-written program's tag)."""
+    if cfg.program:
+        return user_program_tag(cfg)  # type: ignore[return-value]
+    return f"k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}" + "".join(suffix for suffix, _ in search_variants(cfg))
+
+
+@dataclass
+class Searched(OnOracle):
+    """Runs under an artifact that `neurosym synth baseline=<search()>` makes from the oracle."""
+
+    def search(self) -> str:
+        """The baseline whose `synth` stage makes its artifact."""
+        return self.name
+
+    def tag_prefix(self) -> str:
+        """What its artifact tags start with (the report tells retrainings apart by it)."""
+        return ""
+
+    def variants(self, cfg: "RunConfig") -> list[tuple[str, str]]:
+        """(name suffix, override) of the search settings that name its artifact."""
+        return []
+
+    def upstream(self) -> list[Stage]:
+        return [Stage("train", ORACLE), Stage("synth", self.search())]
+
+    def requires(self, verb: str) -> tuple[Stage, ...]:
+        return (Stage("train", ORACLE),)  # synth collects its dataset from the oracle
+
+    def _line(self, verb: str, cfg: "RunConfig", baseline: str, extra: str = "") -> str:
+        named = "" if VERB_DEFAULTS.get(verb) == baseline else f" baseline={baseline}"
+        obj = "".join(override for _, override in self.variants(cfg))
+        return (f"neurosym {verb} task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
+                f" budget={cfg.budget.name} seed={cfg.seed}{named}{obj}{extra}")
+
+    def command(self, verb: str, cfg: "RunConfig") -> str:
+        if verb == "synth":
+            return self._line("synth", cfg, self.search())
+        if verb == "retrain":
+            return self._line("retrain", cfg, self.name)
+        return super().command(verb, cfg)
+
+    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
+        """SHA-1 of what a model retrained under it is retrained under."""
+        raise NotImplementedError
+
+
+@dataclass
+class Program(Searched):
+    """prog, det-prog: the oracle under the synthesized program's hard attention (section 3.3)."""
+
+    det: bool = False
+    """no random rules (det-prog, paper appendix B)"""
+
+    has_program = True
+
+    def search(self) -> str:
+        return "det-prog" if self.det else "prog"
+
+    def tag_prefix(self) -> str:
+        return "det-" if self.det else ""
+
+    def variants(self, cfg: "RunConfig") -> list[tuple[str, str]]:
+        return search_variants(cfg)
+
+    def artifact(self, cfg: "RunConfig") -> Artifact:
+        return Artifact(("det-" if self.det and not cfg.program else "") + search_tag(cfg), "program.txt")
+
+    def label(self, cfg: "RunConfig") -> str:
+        return f"{self.name}-{search_tag(cfg)}"
+
+    def command(self, verb: str, cfg: "RunConfig") -> str:
+        if verb == "retrain" and cfg.program:
+            return self._line("retrain", cfg, self.name, f" program={cfg.program}")
+        return super().command(verb, cfg)
+
+    def provider(self, cfg: "RunConfig", env: Any = None):
+        from ..dsl.files import load_program
+        from ..policy.comm import ProgramComm
+
+        from ..tasks.programs import check_program, feature_map
+
+        path = paths.program_file(cfg)
+        program = load_program(path, None if cfg.program else paths.synth_command(cfg))
+        fmap = feature_map(cfg, env)
+        check_program(program, cfg, str(path), fmap)
+        return ProgramComm(program, fmap)
+
+    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
+        from ..dsl.printer import to_text
+
+        return hashlib.sha1(to_text(comm.program).encode()).hexdigest()  # the rules, comments aside
+
+
+@dataclass
+class Tree(Searched):
+    """dt: the oracle under a decision tree per round imitating a degree-capped hard attention (appendix B)."""
+
+    def search(self) -> str:
+        return "dt"
+
+    def tag_prefix(self) -> str:
+        return "dt-"
+
+    def artifact(self, cfg: "RunConfig") -> Artifact:
+        return Artifact(f"dt-k{cfg.rules}-{cfg.features}", "tree.json")
+
+    def label(self, cfg: "RunConfig") -> str:
+        return f"{self.name}-k{cfg.rules}-{cfg.features}"
+
+    def provider(self, cfg: "RunConfig", env: Any = None):
+        from ..errors import UserError
+        from ..policy.comm import TreeComm
+        from ..synth.tree import TreeModel
+        from ..utils.io import ArtifactError, read_json
+
+        path = paths.tree_file(cfg)
+        if not path.exists():
+            raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
+        try:
+            rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
+        except (UserError, KeyError, TypeError, ValueError, IndexError) as e:
+            raise ArtifactError(f"corrupt tree {path} ({e}); `{paths.synth_command(cfg)} "
+                                f"overwrite=true` fits it again") from None
+        if len(rounds) != cfg.task.rounds:
+            raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
+        from ..tasks.programs import feature_map
+
+        return TreeComm(rounds, feature_map(cfg, env))
+
+    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
+        return hashlib.sha1(paths.tree_file(cfg).read_bytes()).hexdigest()
+
+
+@dataclass
+class RetrainedProgram(Retrained, Program):
+    """prog-retrained, det-prog-retrained: the full method, the oracle retrained under the program (section 3.5)."""
+
+
+@dataclass
+class RetrainedTree(Retrained, Tree):
+    """dt-retrained: the oracle retrained under the tree (appendix B)."""
