@@ -23,6 +23,7 @@ from .. import __version__, paths
 from ..baselines import get
 from ..config import RunConfig
 from ..utils.console import clock, say
+from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 from .select import mean_ci, quiet_job, run_jobs, validate
@@ -100,7 +101,8 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     out = Path(cfg.exp_dir) / "rl"
     write_csv(out / "grid.csv", table)
     write_json(out / "grid.json", {**record, "settings": table, "test": test,
-                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "config": info.config})
+                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "runtime": runtime(),
+                                   "config": info.config})
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "

@@ -29,6 +29,7 @@ from .. import __version__, paths
 from ..baselines import get
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import clock, log, say
+from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 
@@ -316,7 +317,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         "finalists": cfg.select.finalists, "programs": first, "retrained": final,
         "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},
         "seconds": {"search_and_validate": t_search, "to_choice": t_select, "total": time.perf_counter() - t0},
-        "jobs": jobs, "config": info.config})
+        "jobs": jobs, "runtime": runtime(), "config": info.config})
     print_selection(table, cfg, pick["name"], test)
     say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
         f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "
