@@ -157,7 +157,7 @@ def runtime() -> dict[str, object]:
         "pinned": in_effect() and torch.backends.cpu.get_cpu_capability() == "AVX2",
         "capability": torch.backends.cpu.get_cpu_capability(),
         **{key.lower(): os.environ.get(key) for key in PIN},
-        "torch": torch.__version__,
+        "torch": str(torch.__version__),  # a plain str: a checkpoint loads with weights_only=True
         "cpu": cpu_model(),
         "machine": platform.machine(),
         "avx2": "avx2" in flags if flags else None,
