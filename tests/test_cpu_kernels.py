@@ -157,6 +157,22 @@ def test_torch_imported_first_is_one_warning_line(tmp_path):
     assert p.returncode == 0 and p.stderr == "", p.stderr
 
 
+@needs_x86
+def test_a_config_that_comes_too_late_is_one_warning_line(tmp_path):
+    """A Hydra app called without the console script: the import pinned (the default), the config says native."""
+    p = python(f"""
+        import sys
+        from neurosym_cli.commands.apps import APPS
+        sys.argv = ["neurosym train", *{TINY!r}, "cpu_kernels=native"]
+        APPS["train"]()
+        """, tmp_path)
+    assert p.returncode == 0, p.stderr
+    warnings = [line for line in p.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "cpu_kernels=native, but torch was loaded with the AVX2 pin" in warnings[0], p.stderr
+    m = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
+    assert m["runtime"]["cpu_kernels"] == "native" and m["runtime"]["pinned"] is True  # the truth, not the request
+
+
 @pytest.mark.parametrize("args,env,needle", [
     (["cpu_kernels=avx512"], {}, "unknown cpu_kernels 'avx512'; choose one of: avx2 ("),
     (["-m", "cpu_kernels=avx2,native"], {}, "cpu_kernels=avx2,native: one value per command"),

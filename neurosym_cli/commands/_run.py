@@ -89,7 +89,7 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
             raise UserError(str(e).splitlines()[0]) from None
         from ..utils.cpu import warn_once
 
-        warn_once(typed.cpu_kernels)  # what the console script pinned; says so if torch loaded otherwise
+        warn_once(typed.cpu_kernels)  # torch is loaded by now: one line if the config asks for other kernels
         info = RunInfo(OmegaConf.to_container(cfg, resolve=True), sweep,  # type: ignore[arg-type]
                        hc.runtime.output_dir)
         if typed.selected and name not in ("select", "pipeline"):  # the pipeline selects first when it must
