@@ -7,7 +7,9 @@ and without it, alternating in one run, each measurement in a fresh process (the
 Round r runs one process per mode, avx2 then native on even rounds and the other way on odd ones, so a change of
 load on the machine hits both alike. Each process: BPTT training steps of the oracle on random-cross (full soft
 attention: seconds per optimizer step, median over the steps after the first), then the synthesis dataset D
-(seconds: oracle rollouts without gradients) and an MCMC search scored on it (proposals/s, the default scorer). Prints
+(seconds: oracle rollouts without gradients) and an MCMC search scored on it (seconds per proposal, the default
+scorer). Each figure in CPU time of the process (one thread: the work itself, little moved by other jobs on a
+shared machine) and in wall time. Prints
 the ratio pinned / native of each figure per round, its median and range (>1: the pin is slower), and whether
 both modes trained bit-identical weights (on an AVX2 CPU they do: native is AVX2 there, only MKL_CBWR differs).
 """
@@ -48,32 +50,36 @@ def child(a: argparse.Namespace) -> None:
     env = make_env(CrossConfig(name="random-cross", horizon=a.horizon))
     torch.manual_seed(0)
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
-    stamps: list[float] = []
+    stamps: list[tuple[float, float]] = []  # (wall, CPU) seconds at the end of each optimizer step
 
     class Clock:
         def update(self, step, total, metrics):
-            stamps.append(time.perf_counter())
+            stamps.append((time.perf_counter(), time.process_time()))
 
     spec = FitSpec(rollouts=a.batch * (a.steps + 1), batch=a.batch, horizon=a.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(step_per_bucket=False))
-    t0 = time.perf_counter()
     fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), torch.device("cpu"), Clock(),
         lambda s: None)
-    steps = [b - a_ for a_, b in zip([t0, *stamps], stamps)][1:]  # the first step warms up (allocations, caches)
+    # the first step warms up (allocations, caches), so the steps timed run from its end
+    wall = [b[0] - a_[0] for a_, b in zip(stamps, stamps[1:])]
+    cpu_s = [b[1] - a_[1] for a_, b in zip(stamps, stamps[1:])]
     weights = hashlib.sha256(b"".join(p.detach().numpy().tobytes() for p in pol.parameters())).hexdigest()[:16]
 
     pol.eval()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     data = collect(env, pol, a.rollouts, 10, torch.Generator().manual_seed(0), torch.device("cpu"))
-    collect_s = time.perf_counter() - t0
+    collect_s, collect_cpu = time.perf_counter() - t0, time.process_time() - c0
     sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(1),
                       torch.device("cpu"), backend="auto")
     space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), 5)
     rng = random.Random(0)
+    c0 = time.process_time()
     res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, a.mcmc, 1, 0.0, 0.1, rng)
-    print(json.dumps({"runtime": runtime(), "step_s": statistics.median(steps), "steps": len(steps),
-                      "collect_s": collect_s, "proposals_per_s": res.proposals_per_second, "weights": weights,
-                      "objective": res.best_score.total}))
+    mcmc_cpu = time.process_time() - c0
+    print(json.dumps({"runtime": runtime(), "step_s": statistics.median(wall), "step_cpu": statistics.median(cpu_s),
+                      "steps": len(wall), "collect_s": collect_s, "collect_cpu": collect_cpu,
+                      "proposals_per_s": res.proposals_per_second, "proposal_cpu": mcmc_cpu / a.mcmc,
+                      "weights": weights, "objective": res.best_score.total}))
 
 
 def measure(mode: str, a: argparse.Namespace) -> dict:
@@ -110,20 +116,23 @@ def main() -> None:
     for r in range(a.rounds):
         row = {}
         for mode in (MODES if r % 2 == 0 else MODES[::-1]):
-            row[mode] = measure(mode, a)
-            m = row[mode]
-            print(f"round {r + 1}/{a.rounds} {mode:6s}: {m['step_s'] * 1e3:7.1f} ms/step, dataset "
-                  f"{m['collect_s']:5.2f} s, {m['proposals_per_s']:6.1f} proposals/s (torch {m['runtime']['capability']},"
-                  f" MKL_CBWR={m['runtime']['mkl_cbwr']})", flush=True)
+            row[mode] = m = measure(mode, a)
+            m["proposal_s"] = 1 / m["proposals_per_s"]
+            print(f"round {r + 1}/{a.rounds} {mode:6s}: step {m['step_cpu'] * 1e3:6.0f} ms CPU ({m['step_s'] * 1e3:6.0f}"
+                  f" wall), dataset {m['collect_cpu']:5.2f} s CPU ({m['collect_s']:5.2f} wall), proposal "
+                  f"{m['proposal_cpu'] * 1e3:5.1f} ms CPU ({1e3 / m['proposals_per_s']:5.1f} wall); torch "
+                  f"{m['runtime']['capability']}, MKL_CBWR={m['runtime']['mkl_cbwr']}", flush=True)
         runs.append(row)
-    ratio = {"train step time": [x["avx2"]["step_s"] / x["native"]["step_s"] for x in runs],
-             "dataset collection time": [x["avx2"]["collect_s"] / x["native"]["collect_s"] for x in runs],
-             "MCMC time per proposal": [x["native"]["proposals_per_s"] / x["avx2"]["proposals_per_s"] for x in runs]}
+    ratio = {f"{what} ({clock})": [x["avx2"][key] / x["native"][key] for x in runs]
+             for what, keys in (("training step", ("step_cpu", "step_s")), ("dataset collection", ("collect_cpu",
+                                "collect_s")), ("MCMC proposal", ("proposal_cpu", "proposal_s")))
+             for clock, key in zip(("CPU", "wall"), keys)}
     rt = runs[0]["native"]["runtime"]
-    print(f"\n{rt['cpu']} ({rt['machine']}, avx512f {rt['avx512f']}), torch {rt['torch']}, {a.threads} thread(s); "
+    print(f"\ntime pinned / native, per round (CPU time: what the work costs; wall: with the machine's load)")
+    print(f"{rt['cpu']} ({rt['machine']}, avx512f {rt['avx512f']}), torch {rt['torch']}, {a.threads} thread(s); "
           f"native runs torch's {rt['capability']} kernels")
     for name, xs in ratio.items():
-        print(f"pinned / native {name:24s}: {spread(xs)}")
+        print(f"  {name:26s}: {spread(xs)}")
     same = {x["avx2"]["weights"] == x["native"]["weights"] for x in runs}
     print("trained weights: " + ("bit-identical in both modes" if same == {True} else "differ between the modes")
           + f"; best objective {runs[0]['avx2']['objective']:.6f} (avx2) vs {runs[0]['native']['objective']:.6f}"
