@@ -122,6 +122,9 @@ def pin_kernels(args: list[str]) -> str | None:
     if bad:
         return bad if value is not None else f"{cpu.ENV}={mode}: {bad}"
     cpu.warn_once(mode)
+    if mode == "native" and cpu.kept():
+        print(f"neurosym: warning: cpu_kernels=native leaves {' '.join(cpu.kept())} of the environment in place",
+              file=sys.stderr)
     return None
 
 

@@ -24,7 +24,7 @@ needs_x86 = pytest.mark.skipif(not cpu.pinnable(), reason="the AVX2 pin applies 
 
 def clean_env(tmp_path, **extra) -> dict:
     """The environment of a fresh shell: none of the pin's variables, no mode, runs under tmp_path."""
-    env = {k: v for k, v in os.environ.items() if k not in (*cpu.PIN, cpu.ENV)}
+    env = {k: v for k, v in os.environ.items() if k not in (*cpu.PIN, cpu.ENV, cpu.MARK)}
     return {**env, "NEUROSYM_RUNS": str(tmp_path), **extra}
 
 
@@ -72,6 +72,21 @@ def test_native_leaves_the_environment_alone(tmp_path):
     assert subset(m["runtime"], NATIVE) == NATIVE, m["runtime"]
     assert m["runtime"]["cpu_kernels"] == "native" and m["runtime"]["pinned"] is False
     assert m["config"]["cpu_kernels"] == "native"
+
+
+@needs_x86
+def test_native_under_a_pinned_parent_opts_out_and_a_users_own_setting_stays(tmp_path):
+    """A neurosym process started by a pinned one (a script that imported neurosym_cli) inherits the pin's
+    variables: native undoes what neurosym set, not what the user exported (and says so)."""
+    inherited = python("import os, neurosym_cli; print(os.environ['NEUROSYM_PINNED'])", tmp_path).stdout.strip()
+    env = clean_env(tmp_path, NEUROSYM_PINNED=inherited, **cpu.PIN, NEUROSYM_CPU_KERNELS="avx2")
+    code = "import os, neurosym_cli.cli as c; c.pin_kernels(['cpu_kernels=native']); print(os.environ.get('MKL_CBWR'))"
+    p = python(code, tmp_path, env)
+    assert p.returncode == 0 and p.stdout.strip() == "None" and p.stderr == "", p.stderr
+    env = clean_env(tmp_path, MKL_CBWR="AVX2")  # the user's own
+    p = python(code, tmp_path, env)
+    assert p.stdout.strip() == "AVX2", p.stderr
+    assert p.stderr.strip() == "neurosym: warning: cpu_kernels=native leaves MKL_CBWR=AVX2 of the environment in place"
 
 
 @needs_x86

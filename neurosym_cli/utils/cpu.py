@@ -27,8 +27,12 @@ PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2", "ONEDNN_MAX_CPU_ISA": 
 BLAS (the matmuls: conditional numerical reproducibility, AVX2 branch) and oneDNN's ISA ceiling (no fp32 op of
 this project reaches oneDNN on x86 today; the ceiling keeps it so if a torch release routes one there)"""
 
-_state: dict[str, object] = {"mode": None, "set": {}, "warned": False}
-"""this process: the mode applied before torch loaded (None: not yet), the variables this module set"""
+MARK = "NEUROSYM_PINNED"
+"""the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
+them while a user's own settings stay"""
+
+_state: dict[str, object] = {"mode": None, "warned": False}
+"""this process: the mode applied (None: not yet), whether its warning was printed"""
 
 
 def check(value: str) -> str | None:
@@ -102,17 +106,27 @@ def apply(mode: str | None = None) -> str | None:
             return None
         _state["mode"] = mode
         return _mismatch(mode)
+    ours = {k for k in os.environ.get(MARK, "").split(",") if k in PIN}
     if mode == "avx2" and pinnable():
         for key, value in PIN.items():
             if os.environ.get(key) != value:
                 os.environ[key] = value
-                _state["set"][key] = value  # type: ignore[index]
-    else:  # native, or a CPU the pin does not apply to: undo only what this module set (a user's own stays)
-        for key in list(_state["set"]):  # type: ignore[arg-type]
-            os.environ.pop(key, None)
-        _state["set"] = {}
+                ours.add(key)
+        if ours:
+            os.environ[MARK] = ",".join(sorted(ours))
+    else:  # native, or a CPU the pin does not apply to: undo what neurosym set (a user's own settings stay)
+        for key in ours:
+            if os.environ.get(key) == PIN[key]:
+                del os.environ[key]
+        os.environ.pop(MARK, None)
     _state["mode"] = mode
     return None
+
+
+def kept() -> list[str]:
+    """The variables of PIN set in the environment by the user, not by neurosym (native leaves them in place)."""
+    ours = set(os.environ.get(MARK, "").split(","))
+    return [f"{k}={os.environ[k]}" for k in PIN if k in os.environ and k not in ours]
 
 
 def in_effect() -> bool:
