@@ -14,3 +14,4 @@ if [ -f outputs/random-cross/paper/seed0/train/oracle/model.pt ]; then
 fi
 python benchmarks/bench_synth.py --stride 1 --steps 300 --full 2 --threads "$T" --json outputs/bench/synth-s1.json | tee outputs/bench/synth-s1.txt
 python benchmarks/bench_train.py --threads "$T" --json outputs/bench/train.json | tee outputs/bench/train.txt
+python benchmarks/bench_cpu_kernels.py --threads "$T" --json outputs/bench/cpu-kernels.json | tee outputs/bench/cpu-kernels.txt

@@ -17,3 +17,7 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
 """
 
 __version__ = "0.1.0"
+
+from .utils import cpu as _cpu  # noqa: E402  (stdlib only)
+
+_cpu.warn_once()  # pin the CPU kernels before anything imports torch (NEUROSYM_CPU_KERNELS, default avx2)

@@ -14,6 +14,7 @@ from typing import Any
 import torch
 
 from .config import ModelConfig
+from .utils.cpu import runtime
 from .utils.io import ArtifactError, atomic_write_bytes, read_json, write_csv, write_json, write_text  # noqa: F401
 from .policy.transformer import CommTransformer
 
@@ -56,6 +57,7 @@ def policy_payload(policy: CommTransformer, model_cfg: ModelConfig, run_cfg: dic
                  "rounds": policy.n_rounds,
                  **asdict(model_cfg)},
         "config": run_cfg,
+        "runtime": runtime(),  # the kernels it was trained with (utils/cpu.py)
         "fit": fit,
         "done": done,
     }

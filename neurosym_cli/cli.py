@@ -112,6 +112,27 @@ def check_choices(args: list[str]) -> str | None:
     return None
 
 
+def pin_kernels(args: list[str]) -> str | None:
+    """Put the ``cpu_kernels`` of the command line (else NEUROSYM_CPU_KERNELS, else avx2) in effect before torch is
+    imported, in this process and through the environment in every job it starts; a one-line error for an unknown
+    value or a sweep over it (each value needs its own processes), else None."""
+    from neurosym_cli.utils import cpu
+
+    value = cpu.from_args(args)
+    if value is not None and "," in value:
+        return (f"cpu_kernels={value}: one value per command (it is fixed before torch loads); run one sweep per "
+                "value")
+    mode = value if value is not None else cpu.requested()
+    bad = cpu.check(mode)
+    if bad:
+        return bad if value is not None else f"{cpu.ENV}={mode}: {bad}"
+    cpu.warn_once(mode)
+    if mode == "native" and cpu.kept():
+        print(f"neurosym: warning: cpu_kernels=native leaves {' '.join(cpu.kept())} of the environment in place",
+              file=sys.stderr)
+    return None
+
+
 _SUBMITIT = ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install -e '.[cluster]' in the "
              "neurosym checkout (or pip install hydra-submitit-launcher)")
 LAUNCHER_PLUGINS = {
@@ -316,7 +337,7 @@ def _main() -> None:
             schemas = task_schemas(rest, COMMANDS[cmd][0])
         except UserError as e:
             bad = str(e)
-    bad = bad or check(rest, schemas)
+    bad = bad or check(rest, schemas) or pin_kernels(rest)
     rest = force_task_keys(rest, schemas)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)

@@ -13,6 +13,7 @@ from typing import Any, Optional
 
 from .baselines import BaselineConfig
 from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
+from .utils import cpu as _cpu
 from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
@@ -212,6 +213,16 @@ class RunConfig:
     """auto (GPU when present), cpu, cuda"""
     threads: int = 0
     """torch CPU threads; 0 keeps torch's default"""
+    cpu_kernels: str = "avx2"
+    """which CPU kernels torch and MKL run, fixed before torch loads (utils/cpu.py): avx2 pins them to the AVX2
+    code paths (ATEN_CPU_CAPABILITY=avx2, MKL_CBWR=AVX2, ONEDNN_MAX_CPU_ISA=AVX2), so one seed and thread count
+    give the same numbers on x86 machines with and without AVX-512; native leaves torch and MKL to pick this CPU's
+    widest kernels (AVX-512 where present: numbers differ in the last digits from AVX2 machines, and the program
+    searches that follow may differ more). No effect off x86 (ARM has its own kernels) nor on a GPU. Set on the
+    command line or in NEUROSYM_CPU_KERNELS, never in a YAML file: it must hold before torch is imported.
+    Every artifact records it and what was in effect (its ``runtime``). ATen's scalar ``default`` kernels are not
+    offered: every x86-64 CPU since 2013 runs the AVX2 path, and ARM has neither these kernels nor MKL, so they
+    would cost speed without making more machines agree"""
     runs_root: str = "outputs"
     exp_dir: str = MISSING
     """stable artifact directory of this (task, budget, seed); later stages find upstream files here"""
@@ -253,6 +264,7 @@ class RunConfig:
                f"device must be auto, cpu or cuda, got {self.device!r}")
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
+        _check(self.cpu_kernels in _cpu.CHOICES, _cpu.check(self.cpu_kernels) or "")
         _check(self.episode >= 0, f"episode must be >= 0, got {self.episode}")
         _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
         cpus = os.cpu_count() or 1

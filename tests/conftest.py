@@ -3,6 +3,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+import neurosym_cli  # noqa: F401  (before torch: pins the CPU kernels of this process, utils/cpu.py)
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -98,6 +98,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     overrides = list(hc.overrides.task)
     try:
         typed = typed_config(cfg)
+        from ..utils.cpu import warn_once
+
+        warn_once(typed.cpu_kernels)  # torch is loaded by now: one line if the config asks for other kernels
         info = RunInfo(sweep, hc.runtime.output_dir)
         if typed.selected and name not in ("select", "pipeline"):  # the pipeline selects first when it must
             from ..stages.select import apply_selected

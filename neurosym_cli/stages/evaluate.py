@@ -9,6 +9,7 @@ from .. import __version__, artifacts, paths
 from ..config import RunConfig
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
+from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
@@ -41,5 +42,5 @@ def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], sum
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
-        "config": cfg.record(),
+        "runtime": runtime(), "config": cfg.record(),
     })

@@ -24,6 +24,7 @@ from ..schemes import get
 from ..config import RunConfig
 from ..stats import mean_ci
 from ..utils.console import clock, say
+from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 from .select import quiet_job, run_jobs, validate
@@ -99,7 +100,8 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     out = Path(cfg.exp_dir) / "rl"
     write_csv(out / "grid.csv", table)
     write_json(out / "grid.json", {**record, "settings": table, "test": test,
-                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "config": cfg.record()})
+                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "runtime": runtime(),
+                                   "config": cfg.record()})
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "

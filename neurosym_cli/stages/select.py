@@ -29,6 +29,7 @@ from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
+from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 
@@ -295,7 +296,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         "finalists": cfg.select.finalists, "programs": first, "retrained": final,
         "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},
         "seconds": {"search_and_validate": t_search, "to_choice": t_select, "total": time.perf_counter() - t0},
-        "jobs": jobs, "config": cfg.record()})
+        "jobs": jobs, "runtime": runtime(), "config": cfg.record()})
     print_selection(table, cfg, pick["name"], test)
     say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
         f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "

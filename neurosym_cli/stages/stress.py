@@ -13,6 +13,7 @@ from .. import paths
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import clock, log, say
+from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
 from . import RunInfo
 
@@ -84,7 +85,8 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     out = Path(cfg.exp_dir) / "stress"
     write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
                                      "seeds": cfg.stress.seeds, "results": results, "skipped": skipped,
-                                     "seconds": time.perf_counter() - t0, "config": cfg.record()})
+                                     "seconds": time.perf_counter() - t0, "runtime": runtime(),
+                                     "config": cfg.record()})
     write_csv(out / "stress.csv", [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
                                    for r in results])
     from ..plotting import stress_plot

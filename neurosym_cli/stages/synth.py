@@ -18,6 +18,7 @@ from ..synth.objective import CachedScorer
 from ..synth.search import RoundSpec, as_program, search_round
 from ..synth.simplify import rule_stats, simplify
 from ..utils.console import SearchDisplay, log, say, use_rich
+from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.tracking import open_tracker
@@ -134,7 +135,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features, "det": cfg.baseline.det,
         "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(paths.dataset_file(cfg)),
         "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
-        "config": cfg.record(),
+        "runtime": runtime(), "config": cfg.record(),
     })
     say(f"[green]synthesized[/] {out / 'program.txt'}")
     if not info.multirun:
@@ -183,7 +184,7 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket]
     write_json(out / "tree.json", {"rounds": [t.to_dict() for t in trees]})
     write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
                                       "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
-                                      "config": cfg.record()})
+                                      "runtime": runtime(), "config": cfg.record()})
     say(f"[green]fitted[/] {out / 'tree.json'}")
     return {"tree": str(out / "tree.json")}
 

@@ -19,6 +19,7 @@ from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..training import FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
+from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
 from ..utils.tracking import Tracker, open_tracker
@@ -161,7 +162,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         "final_loss_steps": len(last),
         "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
         "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
-        "hydra_dir": info.log_dir, "config": cfg.record(),
+        "hydra_dir": info.log_dir, "runtime": runtime(), "config": cfg.record(),
     })
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "

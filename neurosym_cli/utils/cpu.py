@@ -1,0 +1,179 @@
+"""Which CPU kernels torch and MKL use: pinned to the AVX2 code paths by default, so one seed and thread count give
+the same numbers on x86 machines with and without AVX-512 (docs/reliability.md, 'The same numbers on every x86
+machine'). Stdlib only: it must run before torch is imported, which reads these variables when it loads.
+
+The console script (cli.py) and ``import neurosym_cli`` call :func:`apply`; the mode travels to every child process
+(joblib and process-pool workers, submitit jobs) in ``NEUROSYM_CPU_KERNELS``, which their own ``import
+neurosym_cli`` reads before they import torch. :func:`runtime` is what each artifact records.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import platform
+import sys
+
+ENV = "NEUROSYM_CPU_KERNELS"
+"""environment variable holding the mode: set by the console script for its children, or by a user"""
+DEFAULT = "avx2"
+CHOICES = {
+    "avx2": "torch's and MKL's AVX2 code paths: the same numbers on AVX2 and AVX-512 machines",
+    "native": "the widest kernels this CPU has, AVX-512 where present",
+}
+"""cpu_kernels values -> what they do"""
+PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2", "ONEDNN_MAX_CPU_ISA": "AVX2"}
+"""what the avx2 mode sets before torch loads: ATen's vectorized kernels (softmax, layer norm, elementwise), MKL's
+BLAS (the matmuls: conditional numerical reproducibility, AVX2 branch) and oneDNN's ISA ceiling (no fp32 op of
+this project reaches oneDNN on x86 today; the ceiling keeps it so if a torch release routes one there)"""
+
+MARK = "NEUROSYM_PINNED"
+"""the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
+them while a user's own settings stay"""
+
+_state: dict[str, object] = {"mode": None, "warned": False}
+"""this process: the mode applied (None: not yet), whether its warning was printed"""
+
+
+def check(value: str) -> str | None:
+    """A one-line error for an unknown cpu_kernels value, else None."""
+    if value in CHOICES:
+        return None
+    return f"unknown cpu_kernels {value!r}; choose one of: " + ", ".join(f"{k} ({v})" for k, v in CHOICES.items())
+
+
+def from_args(args: list[str]) -> str | None:
+    """The value of ``cpu_kernels=`` on a command line (the last one wins, as in Hydra), else None."""
+    value = None
+    for a in args:
+        key, sep, v = a.partition("=")
+        if sep and key.lstrip("+") == "cpu_kernels":
+            value = v.strip("'\"")
+    return value
+
+
+def requested() -> str:
+    """The mode asked for through the environment (NEUROSYM_CPU_KERNELS), else the default."""
+    return os.environ.get(ENV) or DEFAULT
+
+
+@functools.lru_cache(maxsize=1)
+def cpu_flags() -> frozenset[str]:
+    """The CPU's feature flags from /proc/cpuinfo (Linux); empty where they cannot be read."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith(("flags", "Features")):
+                    return frozenset(line.partition(":")[2].split())
+    except OSError:
+        pass
+    return frozenset()
+
+
+@functools.lru_cache(maxsize=1)
+def cpu_model() -> str:
+    """The CPU's model name (/proc/cpuinfo on Linux, else what platform reports)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def pinnable() -> bool:
+    """Whether the AVX2 pin means anything here: an x86-64 CPU with AVX2 (elsewhere torch would reject or ignore
+    it: ARM has other kernels and no MKL; an x86 CPU without AVX2 would fault on AVX2 code)."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return False
+    flags = cpu_flags()
+    return not flags or "avx2" in flags  # unreadable flags (not Linux): every x86-64 CPU since 2013 has AVX2
+
+
+def apply(mode: str | None = None) -> str | None:
+    """Put ``mode`` (default: :func:`requested`) in effect for this process and its children. Before torch is
+    imported it sets (avx2) or clears (native) the variables of ``PIN``; once torch is loaded nothing can change,
+    so it returns a one-line warning when what torch loaded with differs from ``mode`` (else None). An unknown mode
+    is left to the caller's check (the console script and RunConfig reject it in one line)."""
+    mode = mode or requested()
+    if mode not in CHOICES:
+        return None
+    os.environ[ENV] = mode  # children (joblib, process pools, submitit) read it in their own import neurosym_cli
+    if "torch" in sys.modules:
+        if _state["mode"] == mode:
+            return None
+        _state["mode"] = mode
+        return _mismatch(mode)
+    ours = {k for k in os.environ.get(MARK, "").split(",") if k in PIN}
+    if mode == "avx2" and pinnable():
+        for key, value in PIN.items():
+            if os.environ.get(key) != value:
+                os.environ[key] = value
+                ours.add(key)
+        if ours:
+            os.environ[MARK] = ",".join(sorted(ours))
+    else:  # native, or a CPU the pin does not apply to: undo what neurosym set (a user's own settings stay)
+        for key in ours:
+            if os.environ.get(key) == PIN[key]:
+                del os.environ[key]
+        os.environ.pop(MARK, None)
+    _state["mode"] = mode
+    return None
+
+
+def kept() -> list[str]:
+    """The variables of PIN set in the environment by the user, not by neurosym (native leaves them in place)."""
+    ours = set(os.environ.get(MARK, "").split(","))
+    return [f"{k}={os.environ[k]}" for k in PIN if k in os.environ and k not in ours]
+
+
+def in_effect() -> bool:
+    """Whether the AVX2 pin held when torch loaded (judged from the variables torch and MKL read)."""
+    return all(os.environ.get(k) == v for k, v in PIN.items() if k != "ONEDNN_MAX_CPU_ISA")
+
+
+def _mismatch(mode: str) -> str | None:
+    import torch
+
+    cap = torch.backends.cpu.get_cpu_capability()
+    pinned = cap == "AVX2" and in_effect()
+    if mode == "avx2" and (pinned or not pinnable()):
+        return None
+    if mode == "native" and not pinned:
+        return None
+    have = f"torch uses {cap} kernels, MKL_CBWR={os.environ.get('MKL_CBWR', 'unset')}"
+    if mode == "avx2":
+        return (f"cpu_kernels=avx2, but torch was imported before the kernels could be pinned ({have}); numbers may "
+                "differ in the last digits from other machines: import neurosym_cli before torch, or set "
+                "ATEN_CPU_CAPABILITY=avx2 MKL_CBWR=AVX2 first")
+    return (f"cpu_kernels=native, but torch was loaded with the AVX2 pin ({have}); this run uses the pinned "
+            f"kernels: set {ENV}=native before starting Python to opt out")
+
+
+def warn_once(mode: str | None = None) -> None:
+    """:func:`apply`, printing its warning (once per process) on stderr."""
+    msg = apply(mode)
+    if msg and not _state["warned"]:
+        _state["warned"] = True
+        print(f"neurosym: warning: {msg}", file=sys.stderr)
+
+
+def runtime() -> dict[str, object]:
+    """What was in effect in this process, recorded beside every artifact: the cpu_kernels mode, torch's CPU
+    capability, the variables of the pin, the torch version, and the CPU (model, machine, AVX2 and AVX-512F)."""
+    import torch
+
+    flags = cpu_flags()
+    return {
+        "cpu_kernels": _state["mode"] or requested(),
+        "pinned": in_effect() and torch.backends.cpu.get_cpu_capability() == "AVX2",
+        "capability": torch.backends.cpu.get_cpu_capability(),
+        **{key.lower(): os.environ.get(key) for key in PIN},
+        "torch": str(torch.__version__),  # a plain str: a checkpoint loads with weights_only=True
+        "cpu": cpu_model(),
+        "machine": platform.machine(),
+        "avx2": "avx2" in flags if flags else None,
+        "avx512f": "avx512f" in flags if flags else None,
+    }

@@ -1,0 +1,231 @@
+"""cpu_kernels: the AVX2 pin is in effect in every process that computes (the console script, joblib workers,
+select's process pool, submitit jobs, Python code importing neurosym_cli), every artifact records it, native opts
+out, and a bad value is one line. Each process starts from an environment without the pin's variables, so what
+the test sees was set by neurosym itself."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from importlib.util import find_spec
+
+import pytest
+import torch
+
+from conftest import ROOT, neurosym_cmd
+from neurosym_cli.utils import cpu
+
+PINNED = {"capability": "AVX2", "aten_cpu_capability": "avx2", "mkl_cbwr": "AVX2", "onednn_max_cpu_isa": "AVX2"}
+NATIVE = {"aten_cpu_capability": None, "mkl_cbwr": None, "onednn_max_cpu_isa": None}
+
+needs_x86 = pytest.mark.skipif(not cpu.pinnable(), reason="the AVX2 pin applies to x86-64 CPUs with AVX2 only")
+
+
+def clean_env(tmp_path, **extra) -> dict:
+    """The environment of a fresh shell: none of the pin's variables, no mode, runs under tmp_path."""
+    env = {k: v for k, v in os.environ.items() if k not in (*cpu.PIN, cpu.ENV, cpu.MARK)}
+    return {**env, "NEUROSYM_RUNS": str(tmp_path), **extra}
+
+
+def cli(args, tmp_path, env=None, timeout=300, check=True):
+    p = subprocess.run([*neurosym_cmd(), *args], cwd=tmp_path, env=env or clean_env(tmp_path), capture_output=True,
+                       text=True, timeout=timeout)
+    if check and p.returncode != 0:
+        raise AssertionError(f"exit {p.returncode}\nstdout:\n{p.stdout}\nstderr:\n{p.stderr}")
+    return p
+
+
+def python(code, tmp_path, env=None):
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], cwd=tmp_path, env=env or clean_env(tmp_path),
+                          capture_output=True, text=True, timeout=120)
+
+
+def subset(record: dict, expected: dict) -> dict:
+    return {k: record.get(k) for k in expected}
+
+
+TINY = ["task=two-groups-cross", "budget=tiny", "threads=1", "plots=false"]
+
+
+@needs_x86
+def test_the_console_script_pins_and_every_artifact_records_it(tmp_path):
+    cli(["train", *TINY], tmp_path)
+    cli(["synth", *TINY, "budget.mcmc_steps=20"], tmp_path)
+    cli(["eval", *TINY, "baseline=prog"], tmp_path)
+    exp = tmp_path / "two-groups-cross/tiny/seed0"
+    records = {"manifest.json": json.loads((exp / "train/oracle/manifest.json").read_text())["runtime"],
+               "model.pt": torch.load(exp / "train/oracle/model.pt", weights_only=True)["runtime"],
+               "summary.json": json.loads(next((exp / "synth").glob("*/summary.json")).read_text())["runtime"],
+               "metrics.json": json.loads(next((exp / "eval").glob("prog*/metrics.json")).read_text())["runtime"]}
+    for name, r in records.items():
+        assert subset(r, PINNED) == PINNED and r["pinned"] is True and r["cpu_kernels"] == "avx2", (name, r)
+        assert r["torch"] == torch.__version__ and r["cpu"] and r["avx512f"] in (True, False), (name, r)
+    manifest = json.loads((exp / "train/oracle/manifest.json").read_text())
+    assert manifest["config"]["cpu_kernels"] == "avx2"  # the request, beside what was in effect
+
+
+@needs_x86
+def test_native_leaves_the_environment_alone(tmp_path):
+    cli(["train", *TINY, "cpu_kernels=native"], tmp_path)
+    m = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
+    assert subset(m["runtime"], NATIVE) == NATIVE, m["runtime"]
+    assert m["runtime"]["cpu_kernels"] == "native" and m["runtime"]["pinned"] is False
+    assert m["config"]["cpu_kernels"] == "native"
+
+
+@needs_x86
+def test_native_under_a_pinned_parent_opts_out_and_a_users_own_setting_stays(tmp_path):
+    """A neurosym process started by a pinned one (a script that imported neurosym_cli) inherits the pin's
+    variables: native undoes what neurosym set, not what the user exported (and says so)."""
+    inherited = python("import os, neurosym_cli; print(os.environ['NEUROSYM_PINNED'])", tmp_path).stdout.strip()
+    env = clean_env(tmp_path, NEUROSYM_PINNED=inherited, **cpu.PIN, NEUROSYM_CPU_KERNELS="avx2")
+    code = "import os, neurosym_cli.cli as c; c.pin_kernels(['cpu_kernels=native']); print(os.environ.get('MKL_CBWR'))"
+    p = python(code, tmp_path, env)
+    assert p.returncode == 0 and p.stdout.strip() == "None" and p.stderr == "", p.stderr
+    env = clean_env(tmp_path, MKL_CBWR="AVX2")  # the user's own
+    p = python(code, tmp_path, env)
+    assert p.stdout.strip() == "AVX2", p.stderr
+    assert p.stderr.strip() == "neurosym: warning: cpu_kernels=native leaves MKL_CBWR=AVX2 of the environment in place"
+
+
+@needs_x86
+def test_joblib_workers_are_pinned(tmp_path):
+    p = cli(["train", "-m", "seed=0,1", "hydra/launcher=joblib", "hydra.launcher.n_jobs=2", *TINY], tmp_path)
+    for s in (0, 1):
+        m = json.loads((tmp_path / f"two-groups-cross/tiny/seed{s}/train/oracle/manifest.json").read_text())
+        assert subset(m["runtime"], PINNED) == PINNED, (s, m["runtime"], p.stdout)
+
+
+@needs_x86
+@pytest.mark.skipif(find_spec("hydra_plugins.hydra_submitit_launcher") is None,
+                    reason="hydra-submitit-launcher is not installed (the dev or cluster extra)")
+def test_a_submitit_job_is_pinned(tmp_path):
+    cli(["train", "-m", "seed=0", "hydra/launcher=submitit_local", *TINY], tmp_path, timeout=600)
+    m = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
+    assert subset(m["runtime"], PINNED) == PINNED, m["runtime"]
+
+
+PROBE = """
+import os
+
+
+def job(cfg, info):
+    from neurosym_cli.utils.cpu import runtime
+
+    return {"name": str(cfg), "pid": os.getpid(), **runtime()}
+"""
+
+POOL = """
+import json, os
+from neurosym_cli.stages import RunInfo
+from neurosym_cli.stages.select import run_jobs
+import probe
+
+print(json.dumps({"pid": os.getpid(), "rows": run_jobs(probe.job, [0, 1], RunInfo(), 2, "probe", name=str)}))
+"""
+
+
+@needs_x86
+@pytest.mark.parametrize("mode", ["avx2", "native"])
+def test_select_and_rl_pool_workers_follow_the_mode(tmp_path, mode):
+    """select and rl run their grid points through run_jobs: a spawned process pool."""
+    (tmp_path / "probe.py").write_text(PROBE)
+    env = clean_env(tmp_path, PYTHONPATH=str(tmp_path), NEUROSYM_CPU_KERNELS=mode)
+    p = python(POOL, tmp_path, env)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert all(r["pid"] != out["pid"] for r in out["rows"]), "the jobs ran in the parent"
+    want = PINNED if mode == "avx2" else NATIVE
+    for r in out["rows"]:
+        assert subset(r, want) == want and r["cpu_kernels"] == mode, r
+
+
+@needs_x86
+def test_importing_neurosym_first_pins_without_importing_torch(tmp_path):
+    p = python("""
+        import os, sys
+        import neurosym_cli
+        assert "torch" not in sys.modules
+        import torch
+        print(torch.backends.cpu.get_cpu_capability(), os.environ["MKL_CBWR"], os.environ["NEUROSYM_CPU_KERNELS"])
+        """, tmp_path)
+    assert p.returncode == 0 and p.stdout.split() == ["AVX2", "AVX2", "avx2"], p.stderr
+    assert p.stderr == ""
+
+
+def test_torch_imported_first_is_one_warning_line(tmp_path):
+    p = python("""
+        import os, torch
+        import neurosym_cli
+        from neurosym_cli.utils.cpu import runtime
+        print(runtime()["pinned"], os.environ.get("MKL_CBWR"))
+        """, tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["False", "None"]  # not pinned, and the record does not pretend it is
+    lines = p.stderr.strip().splitlines()
+    if cpu.pinnable():
+        assert len(lines) == 1 and lines[0].startswith("neurosym: warning: cpu_kernels=avx2, but torch was imported "
+                                                       "before the kernels could be pinned"), p.stderr
+    # the pin set by hand before torch: nothing to say
+    p = python("import torch, neurosym_cli", tmp_path, clean_env(tmp_path, ATEN_CPU_CAPABILITY="avx2", MKL_CBWR="AVX2"))
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+
+
+@needs_x86
+def test_a_config_that_comes_too_late_is_one_warning_line(tmp_path):
+    """A Hydra app called without the console script: the import pinned (the default), the config says native."""
+    p = python(f"""
+        import sys
+        from neurosym_cli.commands.apps import APPS
+        sys.argv = ["neurosym train", *{TINY!r}, "cpu_kernels=native"]
+        APPS["train"]()
+        """, tmp_path)
+    assert p.returncode == 0, p.stderr
+    warnings = [line for line in p.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "cpu_kernels=native, but torch was loaded with the AVX2 pin" in warnings[0], p.stderr
+    m = json.loads((tmp_path / "two-groups-cross/tiny/seed0/train/oracle/manifest.json").read_text())
+    assert m["runtime"]["cpu_kernels"] == "native" and m["runtime"]["pinned"] is True  # the truth, not the request
+
+
+@pytest.mark.parametrize("args,env,needle", [
+    (["cpu_kernels=avx512"], {}, "unknown cpu_kernels 'avx512'; choose one of: avx2 ("),
+    (["-m", "cpu_kernels=avx2,native"], {}, "cpu_kernels=avx2,native: one value per command"),
+    ([], {"NEUROSYM_CPU_KERNELS": "fast"}, "NEUROSYM_CPU_KERNELS=fast: unknown cpu_kernels 'fast'"),
+])
+def test_a_bad_value_is_one_line(tmp_path, args, env, needle):
+    p = cli(["train", *TINY, *args], tmp_path, env=clean_env(tmp_path, **env), check=False)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert needle in p.stderr and "Traceback" not in p.stderr, p.stderr
+    assert not (tmp_path / "two-groups-cross").exists()
+
+
+def test_the_schema_rejects_an_unknown_value_in_one_line():
+    from neurosym_cli.config import ConfigError, RunConfig
+
+    with pytest.raises(ConfigError, match=r"^unknown cpu_kernels 'x'; choose one of: avx2 .*, native "):
+        RunConfig(cpu_kernels="x")
+    assert RunConfig().cpu_kernels == cpu.DEFAULT == "avx2"
+
+
+def test_the_mode_is_read_from_the_command_line_then_the_environment(monkeypatch):
+    assert cpu.from_args(["seed=1", "cpu_kernels=native", "+cpu_kernels='avx2'"]) == "avx2"  # the last one wins
+    assert cpu.from_args(["seed=1"]) is None
+    monkeypatch.delenv(cpu.ENV, raising=False)
+    assert cpu.requested() == "avx2"
+    monkeypatch.setenv(cpu.ENV, "native")
+    assert cpu.requested() == "native"
+
+
+def test_the_test_process_itself_is_pinned():
+    """conftest imports neurosym_cli before torch, so the in-process tests compute with the pin too."""
+    if cpu.pinnable() and cpu.requested() == "avx2" and not any(os.environ.get(k) not in (None, v) for k, v in cpu.PIN.items()):
+        r = cpu.runtime()
+        assert r["pinned"] is True and r["capability"] == "AVX2", r
+
+
+def test_help_stays_free_of_torch():
+    code = ("import sys; sys.argv=['neurosym','--help']; from neurosym_cli.cli import main; main(); "
+            "assert 'torch' not in sys.modules, 'torch imported'")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
