@@ -306,7 +306,7 @@ class VmasTask:
         s = self._read(self._reset_env(env, 0))
         a = torch.full((1, s.n_agents, 2), 0.1 * self.world.u_range, requires_grad=True)
         nxt = self._physics(env, s, a)
-        g, = torch.autograd.grad(nxt.pos.sum(), a, allow_unused=True)
+        g = torch.autograd.grad(nxt.pos.sum(), a, allow_unused=True)[0] if nxt.pos.requires_grad else None
         if g is None or not torch.isfinite(g).all() or g.abs().sum() == 0:
             raise ConfigError(f"scenario {self.cfg.scenario!r}: its step passes no gradient from the actions to the "
                               f"positions (non-differentiable dynamics); BPTT cannot train through it")
@@ -366,15 +366,11 @@ class VmasTask:
 
     # ------------------------------------------------------------------------------ the protocol
     def reset(self, batch: int, gen: torch.Generator) -> list[VmasState]:
-        """``batch`` episodes, each of a team size drawn uniformly from team_sizes, one bucket per size."""
+        """``batch`` episodes split evenly over team_sizes, one bucket per size. Even, not drawn: a bucket's shape
+        (N, B) is then the same at every training step, so each VMAS instance is built once."""
         sizes = self.cfg.sizes
-        pick = torch.randint(len(sizes), (batch,), generator=gen) if len(sizes) > 1 else torch.zeros(batch).long()
-        out = []
-        for k, n in enumerate(sizes):
-            b = int((pick == k).sum())
-            if b:
-                out.append(self._reset_bucket(n, b, gen))
-        return out
+        counts = [batch // len(sizes) + (k < batch % len(sizes)) for k in range(len(sizes))]
+        return [self._reset_bucket(n, b, gen) for n, b in zip(sizes, counts) if b]
 
     def _reset_bucket(self, n: int, b: int, gen: torch.Generator) -> VmasState:
         seed = int(torch.randint(0, 2**31 - 1, (1,), generator=gen))
