@@ -239,14 +239,22 @@ def _ring():
     return ring.RingConfig()
 
 
+def _vmas(name):
+    pytest.importorskip("vmas", reason="the vmas extra is not installed (pip install -e '.[vmas]')")
+    return _paper(name)
+
+
 TASKS = {"random-cross": lambda: _paper("random-cross"), "random-grid": lambda: _paper("random-grid"),
          "unlabeled-goals": lambda: _paper("unlabeled-goals"), "two-groups-cross": lambda: _paper("two-groups-cross"),
-         "ring": _ring, "toy": lambda: ToyConfig()}
+         "ring": _ring, "toy": lambda: ToyConfig(),
+         "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion")}
 
 
 def test_the_contract_covers_every_task_yaml():
-    """Every task YAML of the package and of the examples is in the contract test below."""
-    names = {p.stem for p in (ROOT / "conf" / "task").glob("*.yaml")} - {"random-grid-noisy"}
+    """Every task YAML of the package (nested ones as Hydra names them: vmas/navigation) and of the examples is in
+    the contract test below."""
+    root = ROOT / "conf" / "task"
+    names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.yaml")} - {"random-grid-noisy"}
     names |= {p.stem for p in (ROOT / "examples").glob("*/conf/task/*.yaml")}
     assert names <= set(TASKS), sorted(names - set(TASKS))
 

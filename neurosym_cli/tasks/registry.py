@@ -182,12 +182,14 @@ def entry_point_tasks() -> dict[str, str]:
 
 
 def task_yamls(args: list[str] | None = None) -> dict[str, Path]:
-    """Task name (YAML stem) -> its file, the user's directories last (Hydra's search path: later wins)."""
+    """Task name -> its file, the user's directories last (Hydra's search path: later wins). The name is the path
+    below task/ without the suffix, as Hydra names a nested option: task/vmas/navigation.yaml is ``vmas/navigation``."""
     out: dict[str, Path] = {}
     dirs = [d for d in [_installed_conf()] if d is not None] + search_dirs(args or [])
     for d in dirs:
-        for f in sorted((d / "task").glob("*.yaml")):
-            out[f.stem] = f
+        root = d / "task"
+        for f in sorted(root.rglob("*.yaml")):
+            out[f.relative_to(root).with_suffix("").as_posix()] = f
     return out
 
 
@@ -213,8 +215,12 @@ def yaml_target(name: str, args: list[str] | None = None, _seen: tuple = ()) -> 
     if node.get("_target_"):
         return str(node["_target_"])
     for d in node.get("defaults") or []:
-        if isinstance(d, str) and d not in ("_self_",) and d not in _seen and "/" not in d:
-            t = yaml_target(d, args, _seen + (name,))
+        if not isinstance(d, str) or d == "_self_" or d.startswith("/"):
+            continue
+        # a defaults entry is relative to the YAML's own folder (Hydra): `base` in task/vmas/ is vmas/base
+        ref = f"{name.rpartition('/')[0]}/{d}".lstrip("/")
+        if ref not in _seen:
+            t = yaml_target(ref, args, _seen + (name,))
             if t:
                 return t
     return None
