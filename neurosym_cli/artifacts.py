@@ -43,8 +43,16 @@ def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any
 
 
 def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
-    """A policy checkpoint (weights, architecture, config, resume state)."""
-    return load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
+    """A policy checkpoint (weights, architecture, config, resume state); one with a nan or inf weight (a
+    diverged training, saved before training refused to save them) is refused: it would evaluate as nan."""
+    payload = load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
+    for part in ("state_dict", "comm_state"):
+        weights = payload.get(part)
+        if isinstance(weights, dict) and not all(bool(torch.isfinite(t).all()) for t in weights.values()
+                                                 if isinstance(t, torch.Tensor) and t.is_floating_point()):
+            raise ArtifactError(f"{path} holds non-finite weights (a diverged training); re-run `{made_by}` with "
+                                "overwrite=true and a smaller optim.lr")
+    return payload
 
 
 # ------------------------------------------------------------------------------------------- policies

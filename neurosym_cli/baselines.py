@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from .errors import check_finite
+
 if TYPE_CHECKING:  # for annotations only: config.py imports this module
     from .config import RunConfig
 
@@ -62,6 +64,9 @@ class BaselineConfig:
     """runs under a program in the paper's notation (show-program reads it)"""
     soft_attention: ClassVar[bool] = False
     """hears every other agent with soft attention weights (tables say "all", pictures draw weights as opacity)"""
+
+    def __post_init__(self) -> None:
+        check_finite(self, "baseline.")  # a scheme's own numbers (baseline.radius, ...)
 
     def label(self, cfg: "RunConfig") -> str:
         """Name of its evaluation directory and its row in the tables (k, a program's tag, where they matter)."""

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .baselines import BaselineConfig
-from .errors import ConfigError, UserError, check as _check  # noqa: F401  (UserError: re-exported for every layer)
+from .errors import ConfigError, UserError, check as _check, check_finite  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import cpu as _cpu
 from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
@@ -51,6 +51,7 @@ class TaskConfig:
     failure'). Above 0 the run directory is <task>-fail<p> (paper appendix E: random-grid-noisy, 0.5)"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "task.")
         _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
         _check(self.rounds >= 1, f"task.rounds must be at least 1, got {self.rounds}")
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
@@ -70,6 +71,7 @@ class ModelConfig:
     """dropout on attention weights and residual branches during training"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "model.")
         _check(self.width > 0 and self.ffn > 0, "model.width and model.ffn must be positive")
         _check(0.0 <= self.dropout < 1.0, "model.dropout must lie in [0, 1)")
 
@@ -97,6 +99,7 @@ class OptimConfig:
     with 4 steps per batch vs 221 with 1, unlabeled-goals at 1k rollouts 3.99 vs 5.14 (docs/performance.md)"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "optim.")
         _check(self.lr > 0 and self.lr_final > 0 and self.retrain_lr > 0, "optim learning rates must be positive")
         _check(self.grad_clip > 0, "optim.grad_clip must be positive")
         _check(0.0 < self.gamma <= 1.0, "optim.gamma must lie in (0, 1]")
@@ -180,6 +183,7 @@ class SynthConfig:
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "synth.")
         _check(self.stride > 0, "synth.stride must be positive")
         _check(self.restarts >= 0, "synth.restarts must be non-negative")
         _check(0.0 <= self.final_fraction < 1.0, "synth.final_fraction must lie in [0, 1)")
@@ -258,6 +262,7 @@ class RunConfig:
     <exp_dir>/select/selected.json (pipeline: run the selection first when there is none)"""
 
     def __post_init__(self) -> None:
+        check_finite(self)
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")
         _check(self.lam >= 0, f"lam must be non-negative, got {self.lam}")
         _check(self.device in ("auto", "cpu", "cuda") or self.device.startswith("cuda:"),

@@ -16,7 +16,7 @@ from typing import Callable, Protocol
 
 import torch
 
-from .config import BudgetConfig, OptimConfig
+from .config import BudgetConfig, OptimConfig, UserError
 from .tasks.base import Task, Rng, split_buckets
 from .policy.comm import CommProvider, comm_module
 from .policy.gated import advantage_loss, returns
@@ -62,10 +62,27 @@ class FitState:
     torch_rng: torch.Tensor | None = None
 
 
-def _clip(groups: list[dict], max_norm: float) -> float:
+class Diverged(UserError):
+    """The loss, a gradient norm or a weight became nan or inf at optimizer step ``step`` (1-based); the caller
+    names its checkpoint and the rate to lower (training.fit saves nothing from that step on)."""
+
+    def __init__(self, step: int, what: str):
+        super().__init__(f"training diverged at step {step}: {what}")
+        self.step, self.what = step, what
+
+
+def _finite_weights(groups: list[dict]) -> bool:
+    return all(bool(torch.isfinite(p).all()) for g in groups for p in g["params"])
+
+
+def _clip(groups: list[dict], max_norm: float, step: int) -> float:
     """Clip each parameter group's gradient on its own (the gate's score-function gradient is orders of magnitude
-    larger than the motion's and must not shrink it); returns the transformer's norm before clipping."""
+    larger than the motion's and must not shrink it); returns the transformer's norm before clipping. A non-finite
+    norm is a divergence at ``step``: clipping would scale every gradient by nan."""
     norms = [float(torch.nn.utils.clip_grad_norm_(g["params"], max_norm)) for g in groups]
+    bad = [n for n in norms if not math.isfinite(n)]
+    if bad:
+        raise Diverged(step, f"the gradient norm is {bad[0]}")
     return norms[0]
 
 
@@ -123,15 +140,17 @@ def fit(
                 loss = loss + advantage_loss(ret, traj.logp, mean_return) / (denom * spec.horizon)
                 mean_return = ret.mean(1) if mean_return is None else 0.9 * mean_return + 0.1 * ret.mean(1)
                 total_degree += float(traj.comm_degree.mean(0).sum())
+            if not torch.isfinite(loss):  # checked before the step: no non-finite update reaches the weights
+                raise Diverged(state.step + 1, f"the loss is {float(loss.detach())}")
             loss.backward()
             total_cost += float(traj.cost.detach().mean(0).sum())
             n_eps += bucket.batch
             if spec.optim.step_per_bucket:
-                grad_norm = _clip(groups, spec.optim.grad_clip)
+                grad_norm = _clip(groups, spec.optim.grad_clip, state.step + 1)
                 opt.step()
                 opt.zero_grad(set_to_none=True)
         if not spec.optim.step_per_bucket:  # CLIP -> STEP once for the whole batch
-            grad_norm = _clip(groups, spec.optim.grad_clip)
+            grad_norm = _clip(groups, spec.optim.grad_clip, state.step + 1)
             opt.step()
         state.step += 1
         # LOG
@@ -143,6 +162,8 @@ def fit(
         state.history.append(metrics)
         reporter.update(state.step, spec.steps, metrics)
         if state.step % spec.checkpoint_every == 0 or state.step == spec.steps:
+            if not _finite_weights(groups):  # a finite gradient times a huge rate: never saved, never "trained"
+                raise Diverged(state.step, "a weight is no longer finite")
             state.optimizer = opt.state_dict()
             state.gen_state = gen.get_state()
             state.torch_rng = torch.get_rng_state()

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .errors import check as _check
+from .errors import check as _check, check_finite
 
 
 @dataclass
@@ -31,6 +31,7 @@ class RenderConfig:
     """figures: the asking agent of the rule-region picture (paper Figure 4)"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "render.")
         _check(self.format in ("gif", "mp4"), f"render.format must be gif or mp4, got {self.format!r}")
         _check(self.fps > 0 and self.every > 0 and self.trail >= 0 and self.round >= 1 and self.step >= 0
                and self.agent >= 0, "render.fps and render.every must be positive; render.round at least 1; "
@@ -54,6 +55,7 @@ class SelectConfig:
     """programs searched at once, one process and one thread each; 0 = one per CPU"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "select.")
         _check(bool(self.lam) and all(x >= 0 for x in self.lam), "select.lam must be a non-empty list of values >= 0")
         _check(bool(self.rules) and all(k > 0 for k in self.rules), "select.rules must be a non-empty list of K > 0")
         _check(bool(self.features) and all(f in ("v1", "v2") for f in self.features),
@@ -79,6 +81,7 @@ class ReportConfig:
     """seed of the bootstrap: the same seed gives the same intervals"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "report.")
         _check(self.reps >= 100, f"report.reps must be at least 100, got {self.reps}")
 
 
@@ -97,6 +100,7 @@ class StressConfig:
     """test seeds per condition (the same seeds and episodes for every baseline)"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "stress.")
         _check(all(n > 1 for n in self.agents), "stress.agents must be team sizes of at least 2 per group")
         _check(all(0.0 <= f < 1.0 for f in self.failure), "stress.failure must hold rates in [0, 1)")
         _check(self.seeds > 0, f"stress.seeds must be positive, got {self.seeds}")
@@ -127,6 +131,7 @@ class RLConfig:
     """`neurosym rl`: settings trained at once (one process, one thread each); 0 = one per CPU"""
 
     def __post_init__(self) -> None:
+        check_finite(self, "rl.")
         _check(self.cost >= 0 and all(c >= 0 for c in self.grid_cost), "rl.cost and rl.grid_cost must be >= 0")
         _check(self.init in ("oracle", "scratch") and all(i in ("oracle", "scratch") for i in self.grid_init),
                "rl.init and rl.grid_init must be oracle or scratch")

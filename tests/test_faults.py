@@ -405,3 +405,36 @@ def test_corrupt_dataset_is_collected_again(tmp_path):
     again = load_or_collect(path, "neurosym synth", env, pol, 2, 2, torch.Generator().manual_seed(5),
                             torch.device("cpu"))
     assert torch.equal(again[0].target, data[0].target)  # reused, not collected with the other generator
+
+
+# ------------------------------------------------------------------------------------------ no NaN is a result
+@pytest.mark.parametrize("args,needle", [
+    (["optim.lr=1e6"], "training diverged at step"),
+    (["task.dt=1e30"], "task.dt must lie in"),
+    (["task.v_max=1e308"], "task.v_max must lie in"),
+    (["lam=inf"], "lam must be a finite number"),
+    (["synth.temperature=nan"], "synth.temperature must be a finite number"),
+    (["optim.retrain_lr=inf"], "optim.retrain_lr must be a finite number"),
+])
+def test_a_diverging_or_non_finite_run_is_one_line_and_never_trained(tmp_path, args, needle):
+    import torch
+
+    p = run(["train", "budget=tiny", *args], tmp_path, check=False)
+    one_line_error(p, needle)
+    for ckpt in tmp_path.rglob("model.pt"):  # what a diverged run keeps is finite and not marked trained
+        payload = torch.load(ckpt, weights_only=True)
+        assert not payload["done"] and all(torch.isfinite(t).all() for t in payload["state_dict"].values())
+
+
+def test_a_checkpoint_with_non_finite_weights_is_refused(tmp_path):
+    """A NaN checkpoint (as a diverged training saved before this check) is refused by eval, synth and resume."""
+    import torch
+
+    run(["train", "budget=tiny"], tmp_path)
+    ckpt = tmp_path / "random-cross/tiny/seed0/train/oracle/model.pt"
+    payload = torch.load(ckpt, weights_only=True)
+    next(iter(payload["state_dict"].values())).fill_(float("nan"))
+    torch.save(payload, ckpt)
+    for verb in (["eval", "baseline=tf-full"], ["synth"], ["train", "budget.train_rollouts=16"]):
+        one_line_error(run([*verb, "budget=tiny"], tmp_path, check=False), "non-finite weights")
+    assert not (tmp_path / "random-cross/tiny/seed0/eval/tf-full/metrics.json").exists()

@@ -29,6 +29,7 @@ class CommRange(OwnRule):
     the other groups (docs/fidelity.md, 'Communication range')"""
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         check(self.radius > 0, f"baseline.radius must be positive, got {self.radius}")
 
     def tag(self, cfg: "RunConfig") -> str:

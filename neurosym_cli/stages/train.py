@@ -17,7 +17,7 @@ from ..schemes import with_run
 from ..tasks import make_task, probe
 from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module, with_link_failure
-from ..training import FitSpec, FitState, fit
+from ..training import Diverged, FitSpec, FitState, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
@@ -52,6 +52,26 @@ def check_compatible(saved: dict, cfg: RunConfig, path) -> None:
             if old.get(f.name, dflt) != new:
                 raise ConfigError(f"{path} was trained with {key}.{f.name}={old.get(f.name, dflt)!r}, this run has "
                                   f"{new!r}; pass overwrite=true to start over or runs_root=... to train elsewhere")
+
+
+def _rate_key(spec: FitSpec) -> str:
+    return "optim.lr" if spec.lr is None else "optim.retrain_lr"  # train_run's callers pass retrain_lr as lr
+
+
+def _rate(spec: FitSpec) -> float:
+    return spec.optim.lr if spec.lr is None else spec.lr
+
+
+def _kept(ckpt) -> str:
+    """What a diverged run leaves: its last finite checkpoint (fit saves nothing from the bad step on)."""
+    if not ckpt.exists():
+        return "nothing was saved"
+    try:
+        payload = artifacts.load_checkpoint(ckpt, "")
+        step, done = payload["fit"]["step"], payload["done"]
+    except Exception:  # the message is about the divergence; an unreadable old file only loses the step number
+        return f"{ckpt} is kept as it was"
+    return f"the last finite checkpoint (step {step}{'' if done else ', not marked trained'}) is kept at {ckpt}"
 
 
 def train(cfg: RunConfig, info: RunInfo) -> dict:
@@ -150,8 +170,12 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
     tb = paths.tensorboard_dir(cfg, f"{verb}-{paths.model_name(cfg)}")
     with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep, \
             open_tracker(cfg.logger, tb, steps_before) as tracker:
-        state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
-                    save, state)
+        try:
+            state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
+                        save, state)
+        except Diverged as e:
+            raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "
+                              "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
     last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise

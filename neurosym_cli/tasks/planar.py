@@ -34,7 +34,10 @@ class PlanarConfig(TaskConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(self.noise_std >= 0.0, "task.noise_std must be non-negative")
-        _check(self.dt > 0 and self.v_max > 0, "task.dt and task.v_max must be positive")
+        # bounded above: a step of more than a second, or a speed beyond 100 world units a second (the arenas are
+        # tens of units wide), overflows the squared-distance losses within an episode instead of training
+        _check(0 < self.dt <= 1.0, f"task.dt must lie in (0, 1] seconds, got {self.dt}")
+        _check(0 < self.v_max <= 100.0, f"task.v_max must lie in (0, 100] world units per second, got {self.v_max}")
 
 
 def relative_observation(pos: Tensor, noise_std: float, rng: Rng) -> Tensor:
