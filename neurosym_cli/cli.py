@@ -221,6 +221,17 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     if any(a in ("--help", "-h", "--hydra-help", "--cfg", "-c", "--info", "-i", "--version") or a.startswith("-sc")
            for a in args):
         return args, None  # Hydra answers these without a run directory
+    if not _runs_root(args).strip():  # Path("") is the working directory, and Hydra's ${runs_root}/... is "/..."
+        return args, "runs_root is empty; name the directory that holds the runs (runs_root=outputs, or NEUROSYM_RUNS)"
+    if any(a.partition("=")[0].lstrip("+") == "exp_dir" and not a.partition("=")[2].strip("'\" ") for a in args):
+        return args, "exp_dir is empty; leave it out (it is <runs_root>/<task>/<budget>/seed<S>)"
+    from neurosym_cli.errors import lies_under
+
+    for a in args:  # Hydra makes its log directory under exp_dir before the schema can refuse it
+        key, _, value = a.partition("=")
+        if key.lstrip("+") == "exp_dir" and "${" not in value and not lies_under(value.strip("'\""), _runs_root(args)):
+            return args, (f"exp_dir={value} lies outside runs_root={_runs_root(args)}; every artifact is written "
+                          "under runs_root: set runs_root=... instead")
     root = Path(_runs_root(args)).expanduser().absolute()
     probe = root
     while not probe.exists() and probe != probe.parent:

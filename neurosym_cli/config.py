@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .baselines import BaselineConfig
-from .errors import ConfigError, UserError, check as _check, check_finite  # noqa: F401  (UserError: re-exported for every layer)
+from .errors import ConfigError, UserError, check as _check, check_finite, check_name, lies_under  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import cpu as _cpu
 from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
@@ -52,6 +52,8 @@ class TaskConfig:
 
     def __post_init__(self) -> None:
         check_finite(self, "task.")
+        if self.name != MISSING:
+            check_name(self.name, "task.name")
         _check(self.horizon > 0, f"task.horizon must be positive, got {self.horizon}")
         _check(self.rounds >= 1, f"task.rounds must be at least 1, got {self.rounds}")
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
@@ -134,6 +136,8 @@ class BudgetConfig:
     """optimizer steps between plain log lines (non-terminal output)"""
 
     def __post_init__(self) -> None:
+        if self.name != MISSING:
+            check_name(self.name, "budget.name")
         _check(self.train_rollouts > 0, f"budget.train_rollouts must be positive, got {self.train_rollouts}")
         _check(self.batch_rollouts > 0, f"budget.batch_rollouts must be positive, got {self.batch_rollouts}")
         _check(self.eval_seeds > 0, f"budget.eval_seeds must be positive, got {self.eval_seeds}")
@@ -263,6 +267,12 @@ class RunConfig:
 
     def __post_init__(self) -> None:
         check_finite(self)
+        _check(bool(self.runs_root.strip()), "runs_root is empty; name the directory that holds the runs "
+               "(runs_root=outputs, or NEUROSYM_RUNS)")
+        _check(bool(self.exp_dir.strip()), "exp_dir is empty; leave it out (it is <runs_root>/<task>/<budget>/seed<S>)")
+        _check(self.exp_dir == MISSING or lies_under(self.exp_dir, self.runs_root),
+               f"exp_dir={self.exp_dir} lies outside runs_root={self.runs_root}; every artifact is written under "
+               "runs_root: set runs_root=... instead")
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")
         _check(self.lam >= 0, f"lam must be non-negative, got {self.lam}")
         _check(self.device in ("auto", "cpu", "cuda") or self.device.startswith("cuda:"),

@@ -20,7 +20,7 @@ from typing import Any, Iterable, Sequence
 
 from . import stats
 from .errors import ConfigError, UserError
-from .utils.io import ArtifactError
+from .utils.io import ArtifactError, check_inside
 
 SHARED = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
 """the metrics every evaluation has (rollout.METRICS, named here so that reading results needs no torch)"""
@@ -415,6 +415,7 @@ def draw(by_task: dict[str, Sequence[SeedRun]], out_dir: Path, mix: bool = False
 
     from .plotting import profile_plot, seeds_plane
 
+    check_inside(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     made = []
     for task, runs in by_task.items():

@@ -438,3 +438,36 @@ def test_a_checkpoint_with_non_finite_weights_is_refused(tmp_path):
     for verb in (["eval", "baseline=tf-full"], ["synth"], ["train", "budget.train_rollouts=16"]):
         one_line_error(run([*verb, "budget=tiny"], tmp_path, check=False), "non-finite weights")
     assert not (tmp_path / "random-cross/tiny/seed0/eval/tf-full/metrics.json").exists()
+
+
+# ------------------------------------------------------------------------------------------ nothing outside the runs root
+@pytest.mark.parametrize("arg,needle", [
+    ("task.name=../esc", "task.name='../esc' contains '/'"), ("budget.name=../../esc", "budget.name='../../esc'"),
+    ("budget.name=..", "budget.name='..' is '..'"), ("task.name=", "task.name='' is empty"),
+    ("runs_root=", "runs_root is empty"), ("exp_dir=", "exp_dir is empty"),
+    ("exp_dir=../outside", "lies outside runs_root"),
+])
+def test_names_and_roots_that_would_write_elsewhere_are_one_line(tmp_path, arg, needle):
+    root = tmp_path / "root"
+    root.mkdir()
+    top = set(os.listdir("/"))
+    one_line_error(run(["train", "budget=tiny", arg], root, check=False), needle)
+    assert os.listdir(tmp_path) == ["root"] and set(os.listdir("/")) <= top  # nothing beside or above the root
+    assert not list(root.rglob("model.pt"))
+
+
+def test_every_write_is_checked_against_the_runs_root(tmp_path):
+    from neurosym_cli.utils.io import confine
+
+    confine([tmp_path / "root"])
+    try:
+        write_text(tmp_path / "root" / "a" / "ok.txt", "x")
+        for where in (tmp_path / "elsewhere.txt", tmp_path / "root" / ".." / "esc.txt"):
+            with pytest.raises(ArtifactError, match="outside the runs root"):
+                write_text(where, "x")
+        with pytest.raises(ArtifactError, match="outside the runs root"):
+            with run_lock(tmp_path / "run"):
+                pass
+    finally:
+        confine([])
+    assert sorted(os.listdir(tmp_path)) == ["root"]

@@ -102,6 +102,12 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
 
         warn_once(typed.cpu_kernels)  # torch is loaded by now: one line if the config asks for other kernels
         info = RunInfo(sweep, hc.runtime.output_dir)
+        from ..utils.io import confine
+
+        # the runs root, the output directories a user named, and Hydra's own (job_result.json; a read-only
+        # command's logs in the temp directory)
+        confine([typed.runs_root, hc.runtime.output_dir,
+                 *(d for d in (typed.report_dir, typed.report.seed_files) if d)])
         if typed.selected and name not in ("select", "pipeline"):  # the pipeline selects first when it must
             from ..stages.select import apply_selected
 

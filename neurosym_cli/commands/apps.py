@@ -13,6 +13,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from ..config import RunConfig
+from ..errors import name_problem
 from ..schemes import SCHEMES, default_baselines
 from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
@@ -24,6 +25,17 @@ def fail_suffix(p: float) -> str:
 
 if not OmegaConf.has_resolver("fail_suffix"):
     OmegaConf.register_new_resolver("fail_suffix", fail_suffix)
+
+
+def path_name(name: str) -> str:
+    """A name as one directory of exp_dir; one that is not (``errors.name_problem``) becomes a placeholder, so
+    Hydra's log directory, made from exp_dir before the schema refuses the name in one line, stays in the runs
+    root."""
+    return "invalid-name" if name_problem(str(name)) else str(name)
+
+
+if not OmegaConf.has_resolver("path_name"):
+    OmegaConf.register_new_resolver("path_name", path_name)
 
 _store = ConfigStore.instance()
 _schema = OmegaConf.structured(RunConfig)

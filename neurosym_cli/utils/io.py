@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from ..config import UserError
+from ..errors import lies_under
 
 
 class ArtifactError(UserError):
@@ -26,9 +27,28 @@ def _file_mode() -> int:
 
 _MODE = _file_mode()
 
+_ROOTS: list[Path] = []
+"""where a command may write (``confine``): its runs root, and the output directories the user named"""
+
+
+def confine(roots: Sequence[str | Path]) -> None:
+    """Let this process write only under ``roots`` (set by the command wrapper, commands/_run.py); empty: anywhere
+    (the Python API, tests)."""
+    _ROOTS[:] = [Path(r).expanduser().resolve() for r in roots]
+
+
+def check_inside(path: Path) -> None:
+    """Refuse to write ``path`` outside the confined roots (every artifact write and run directory goes through
+    here): a name that slipped past the schema's checks must not write elsewhere on the machine."""
+    if not _ROOTS:
+        return
+    if not any(lies_under(path, r) for r in _ROOTS):
+        raise ArtifactError(f"refusing to write {Path(path).resolve()}: it lies outside the runs root {_ROOTS[0]}")
+
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``path`` so that a reader sees the old file or the new one, never a part (temp file, fsync, rename)."""
+    check_inside(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")

@@ -13,7 +13,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
-from .io import ArtifactError
+from .io import ArtifactError, check_inside
 
 try:
     import fcntl
@@ -25,6 +25,7 @@ except ImportError:  # pragma: no cover - not on Linux or macOS: no locking, as 
 def run_lock(directory: Path) -> Iterator[None]:
     """Hold ``directory``'s lock for the duration of the block (ArtifactError when another process holds it)."""
     directory = Path(directory)
+    check_inside(directory)
     try:
         directory.mkdir(parents=True, exist_ok=True)
         fd = os.open(directory / ".lock", os.O_RDWR | os.O_CREAT, 0o666)

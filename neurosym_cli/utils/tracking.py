@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Mapping
 
 from ..config import UserError
+from .io import check_inside
 
 
 class Tracker:
@@ -36,6 +37,7 @@ class TensorBoardTracker(Tracker):
         except ImportError:
             raise UserError("logger=tensorboard needs the tensorboard extra: pip install -e '.[tensorboard]' in the "
                             "neurosym checkout (or pip install tensorboard; or logger=csv)") from None
+        check_inside(logdir)
         logdir.mkdir(parents=True, exist_ok=True)
         if not start:  # a run that starts over (overwrite=true, a new search) starts a new curve
             for old in logdir.glob("events.out.tfevents.*"):

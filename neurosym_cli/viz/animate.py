@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..episode import EpisodeRecord
+from ..utils.io import check_inside
 from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
@@ -144,6 +145,7 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
             frames.append(scene.frame())
     finally:
         scene.close()
+    check_inside(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
     if path.suffix == ".mp4":

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..utils.io import check_inside
+
 GROUP_COLORS = ("#4e79a7", "#f28e2b", "#59a14f", "#b07aa1", "#76b7b2", "#edc948", "#9c755f", "#ff9da7")
 """agents and goals by group (formation tasks); unlabeled agents all take the first"""
 RULE_COLORS = ("#d62728", "#111111", "#17becf", "#bcbd22", "#8c564b", "#e377c2", "#7f7f7f", "#9467bd")
@@ -59,6 +61,7 @@ def edge_segments(pos: np.ndarray, mask: np.ndarray, shrink: float = 0.0) -> tup
 def save_figure(fig, path: Path) -> Path:
     """Write a figure atomically (temp file, then rename) and close it."""
     plt = matplotlib_agg()
+    check_inside(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
     fig.savefig(tmp, bbox_inches="tight", pad_inches=0.12)  # legends below the axes are kept, never clipped
