@@ -471,3 +471,54 @@ def test_every_write_is_checked_against_the_runs_root(tmp_path):
     finally:
         confine([])
     assert sorted(os.listdir(tmp_path)) == ["root"]
+
+
+# ------------------------------------------------------------------------------------------ sweeps
+def _job_dir(sweep: Path, name: str, result=None, raw: bytes | None = None, age: float = 0.0) -> Path:
+    d = sweep / name
+    (d / ".hydra").mkdir(parents=True)
+    (d / ".hydra" / "overrides.yaml").write_text("[]\n")
+    if result is not None:
+        (d / "job_result.json").write_text(__import__("json").dumps(result))
+    if raw is not None:
+        (d / "job_result.json").write_bytes(raw)
+    if age:  # Hydra started it this long before the current sweep
+        t = time.time() - age
+        os.utime(d / ".hydra" / "overrides.yaml", (t, t))
+    return d
+
+
+def test_a_malformed_job_result_is_a_failed_job_and_fails_the_sweep(tmp_path, capsys):
+    from omegaconf import OmegaConf
+
+    from neurosym_cli.commands.sweep import SweepSummary, collect, start
+
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    _job_dir(sweep, "9_seed=9", {"ok": True, "job": 9, "overrides": ["seed=9"], "row": {}}, age=3600)  # earlier
+    sid = start(sweep)
+    _job_dir(sweep, "0_seed=0", {"ok": True, "job": 0, "overrides": ["seed=0"], "sweep": sid, "row": {"loss": 1.5}})
+    _job_dir(sweep, "1_seed=1", [1, 2])
+    _job_dir(sweep, "2_seed=2", {"ok": "yes", "job": 2, "overrides": "seed=2", "sweep": sid})
+    _job_dir(sweep, "3_seed=3", {"ok": True, "job": 3, "overrides": ["seed=3"], "sweep": sid, "row": 7})
+    _job_dir(sweep, "4_seed=4", raw=b"\xff{")
+    _job_dir(sweep, "5_seed=5")  # started, then killed before it wrote anything
+    rows = collect(sweep)
+    assert [(r["job"], r["ok"]) for r in rows] == [(0, True), (1, False), (2, False), (3, False), (4, False),
+                                                   (5, False)]
+    assert "malformed" in rows[1]["error"] and "no result" in rows[5]["error"]
+    with pytest.raises(SystemExit) as e:
+        SweepSummary().on_multirun_end(OmegaConf.create({"cmd": "train", "hydra": {"sweep": {"dir": str(sweep)}}}))
+    assert e.value.code == 1
+    out = capsys.readouterr().out
+    assert "6 jobs" in out and "5 of 6 jobs failed" in out and "seed=9" not in out
+
+
+def test_a_reused_sweep_directory_lists_only_this_sweeps_jobs(tmp_path):
+    sweep = tmp_path / "sweep"
+    _job_dir(sweep, "7_seed=7", {"ok": True, "job": 7, "overrides": ["seed=7"], "row": {}}, age=60)  # a sweep before
+    prog = tmp_path / "p.txt"
+    prog.write_text("random(filter(true, l))\n")
+    p = run(["show-program", "-m", "seed=0,1", "task=random-grid", "budget=tiny", f"program={prog}",
+             f"hydra.sweep.dir={sweep}"], tmp_path)
+    assert ": 2 jobs" in p.stdout and "seed=0" in p.stdout and "seed=1" in p.stdout and "seed=7" not in p.stdout

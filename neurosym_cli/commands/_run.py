@@ -96,6 +96,14 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
         set_job_prefix(job_prefix(list(hc.overrides.task), hc.job.num))
     record = Path(hc.runtime.output_dir) / "job_result.json"
     overrides = list(hc.overrides.task)
+    stamp: dict[str, Any] = {}
+    if sweep:  # stamped with the sweep's id; written first, so a job killed mid-run reads as failed, not as stale
+        from ..utils.io import write_json
+        from .sweep import job_sweep_id
+
+        stamp = {"job": hc.job.num, "overrides": overrides, "sweep": job_sweep_id(Path(hc.runtime.output_dir))}
+        write_json(record, {"ok": False, **stamp,
+                            "error": f"no result (it crashed or was killed; see {hc.runtime.output_dir})"})
     try:
         typed = typed_config(cfg)
         from ..utils.cpu import warn_once
@@ -124,12 +132,12 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
         from ..utils.io import write_json
 
         say(f"[red]neurosym {name.replace('_', '-')}: error:[/] {e} (this job only; the sweep goes on)")
-        write_json(record, {"ok": False, "job": hc.job.num, "overrides": overrides, "error": str(e)})
+        write_json(record, {"ok": False, **stamp, "error": str(e)})
         return None
     except KeyboardInterrupt:
         _error(name, "interrupted; artifacts written so far are intact, re-run the same command to resume", 130)
     if sweep:
         from ..utils.io import write_json
 
-        write_json(record, {"ok": True, "job": hc.job.num, "overrides": overrides, "row": _row(result)})
+        write_json(record, {"ok": True, **stamp, "row": _row(result)})
     return result
