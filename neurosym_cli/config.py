@@ -291,10 +291,30 @@ class RunConfig:
 
     def record(self) -> dict:
         """The config as written beside every artifact (JSON-safe), derived from this typed config when written:
-        there is no second copy to keep in step. Resume checks compare its typed sections (``same_sections``)."""
+        there is no second copy to keep in step. Resume checks compare its typed sections (``first_difference``)."""
         import dataclasses
 
         return dataclasses.asdict(self)
+
+    def first_difference(self, record: dict, sections: tuple[str, ...],
+                         skip: frozenset[str] = frozenset()) -> tuple[str, Any, Any] | None:
+        """The first ``(section.key, recorded, this run's)`` where a ``record()`` written earlier differs from this
+        config in ``sections``, or None. Fields the record lacks (added later) compare as their defaults; fields
+        the schemas no longer have, and the ``skip`` keys, are ignored."""
+        import dataclasses
+
+        for key in sections:
+            old = record.get(key) if isinstance(record.get(key), dict) else {}
+            section = getattr(self, key)
+            for f in dataclasses.fields(section):
+                if f.name in skip:
+                    continue
+                new = getattr(section, f.name)
+                dflt = f.default if f.default is not dataclasses.MISSING else (
+                    f.default_factory() if f.default_factory is not dataclasses.MISSING else None)  # type: ignore[misc]
+                if old.get(f.name, dflt) != new:
+                    return f"{key}.{f.name}", old.get(f.name, dflt), new
+        return None
 
     @property
     def horizon(self) -> int:

@@ -522,3 +522,25 @@ def test_a_reused_sweep_directory_lists_only_this_sweeps_jobs(tmp_path):
     p = run(["show-program", "-m", "seed=0,1", "task=random-grid", "budget=tiny", f"program={prog}",
              f"hydra.sweep.dir={sweep}"], tmp_path)
     assert ": 2 jobs" in p.stdout and "seed=0" in p.stdout and "seed=1" in p.stdout and "seed=7" not in p.stdout
+
+
+# ------------------------------------------------------------------------------------------ keyed results
+def test_an_evaluation_is_of_the_condition_and_baseline_it_names(tmp_path):
+    """eval refuses an option its baseline ignores (program= for tf-full) and a task condition other than the
+    model's training (it would replace the trained condition's metrics); protocol keys may differ."""
+    common = ["task=random-grid", "budget=tiny", "plots=false"]
+    run(["train", *common], tmp_path)
+    run(["eval", *common, "baseline=tf-full"], tmp_path)
+    metrics = tmp_path / "random-grid/tiny/seed0/eval/tf-full/metrics.json"
+    before = metrics.read_bytes()
+    mine = tmp_path / "mine.txt"
+    mine.write_text("random(filter(true, l))\nrandom(filter(true, l))\n")
+    one_line_error(run(["eval", *common, "baseline=tf-full", f"program={mine}"], tmp_path, check=False),
+                   "program= is for the baselines that run under a program")
+    p = run(["eval", *common, "baseline=tf-full", "task.noise_std=0.5"], tmp_path, check=False)
+    one_line_error(p, "was trained with task.noise_std=0.05, this run has 0.5")
+    assert metrics.read_bytes() == before
+    # resuming under another condition names the key too (the same comparison)
+    one_line_error(run(["train", *common, "task.noise_std=0.5", "budget.train_rollouts=16"], tmp_path, check=False),
+                   "was trained with task.noise_std=0.05")
+    run(["eval", *common, "baseline=tf-full", "task.eval_episodes=2"], tmp_path)  # the protocol, not the condition

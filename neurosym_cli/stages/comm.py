@@ -4,7 +4,7 @@ artifact (program or tree) loaded and checked against the task, and the weights 
 from __future__ import annotations
 
 from .. import artifacts, paths
-from ..config import RunConfig
+from ..config import ConfigError, RunConfig
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..utils.io import ArtifactError
 from ..tasks.programs import check_program, feature_map  # noqa: F401  (re-exported)
@@ -37,6 +37,21 @@ def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
     return cfg.baseline.artifact_identity(cfg, comm)  # type: ignore[attr-defined]
 
 
+PROTOCOL_KEYS = frozenset({"eval_episodes", "test_settings", "rules", "lam"})
+"""task fields that choose the evaluation protocol or the search's defaults, not the condition a model acts in"""
+
+
+def check_trained_condition(cfg: RunConfig, payload: dict, path) -> None:
+    """Refuse to evaluate (or draw) a model under a task condition other than its training's: the result would be
+    written where the trained condition's is (eval/<label>/) and read as it by `report` and the figures."""
+    diff = cfg.first_difference(payload.get("config") or {}, ("task",), PROTOCOL_KEYS)
+    if diff:
+        key, old, new = diff
+        raise ConfigError(f"{path} was trained with {key}={old!r}, this run has {new!r}: its results would replace "
+                          f"those under the trained condition; leave {key} out, or train a model under it in its "
+                          f"own runs root (`{paths.train_command(cfg)} {key}={new} runs_root=...`)")
+
+
 def load_baseline(cfg: RunConfig, device, task=None):
     """(policy on ``device``, task, provider) of ``cfg.baseline``: its trained weights and its communication, on
     ``task`` (built from the config when not given). A partly trained model is used with a warning naming the
@@ -44,7 +59,15 @@ def load_baseline(cfg: RunConfig, device, task=None):
     from ..tasks import make_task
     from ..utils.console import log
 
+    if cfg.program and not cfg.baseline.has_program:  # it would be ignored, and the result filed as the baseline's
+        from ..schemes import SCHEMES
+
+        raise ConfigError(f"program= is for the baselines that run under a program "
+                          f"({', '.join(n for n, b in SCHEMES.items() if b.has_program)}); {cfg.baseline.name} runs "
+                          "under none: leave program= out")
     payload = artifacts.load_checkpoint(paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
+    if task is None:  # the run's own task: it must be the one trained on (`stress` varies it on purpose)
+        check_trained_condition(cfg, payload, paths.train_dir(cfg) / "model.pt")
     if not payload.get("done"):
         log.warning("the model is only partly trained (step %d); using it anyway; `%s` finishes it",
                     payload["fit"]["step"], paths.train_command(cfg))

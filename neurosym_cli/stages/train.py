@@ -4,7 +4,6 @@ section 3.5). Both use the one training loop of ``training.fit``."""
 
 from __future__ import annotations
 
-import dataclasses
 import platform
 import time
 from typing import Callable
@@ -40,18 +39,13 @@ class Tracked:
 
 def check_compatible(saved: dict, cfg: RunConfig, path) -> None:
     """A checkpoint is resumed or extended only under the same task, model and optimiser config, compared section
-    by section against the typed config. Fields a checkpoint lacks (added later) compare as their defaults; fields
-    the schemas no longer have are ignored. The message names the first differing key."""
-    for key in ("task", "model", "optim"):
-        old = saved.get(key) if isinstance(saved.get(key), dict) else {}
-        section = getattr(cfg, key)
-        for f in dataclasses.fields(section):
-            new = getattr(section, f.name)
-            dflt = f.default if f.default is not dataclasses.MISSING else (
-                f.default_factory() if f.default_factory is not dataclasses.MISSING else None)  # type: ignore[misc]
-            if old.get(f.name, dflt) != new:
-                raise ConfigError(f"{path} was trained with {key}.{f.name}={old.get(f.name, dflt)!r}, this run has "
-                                  f"{new!r}; pass overwrite=true to start over or runs_root=... to train elsewhere")
+    by section against the typed config (``RunConfig.first_difference``). The message names the first differing
+    key."""
+    diff = cfg.first_difference(saved, ("task", "model", "optim"))
+    if diff:
+        key, old, new = diff
+        raise ConfigError(f"{path} was trained with {key}={old!r}, this run has {new!r}; pass overwrite=true to start "
+                          "over or runs_root=... to train elsewhere")
 
 
 def _rate_key(spec: FitSpec) -> str:
