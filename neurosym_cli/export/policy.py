@@ -3,7 +3,9 @@ given as input (the exported model never decides it) and the task's target (the 
 inside, so the output is the action as the task applies it.
 
     policy.pt / policy.onnx   the team in one call: agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) int64
-                              (-1 = nobody; an agent picked twice counts once) -> action (B, N, A)
+                              (-1 = nobody; an agent picked twice counts once) -> action (B, N, A) as applied,
+                              and raw (B, N, A), the transformer's output before Task.target (what a simulator's
+                              Task.step takes)
     agent/*.onnx              the same function cut where the messages travel, for one agent on its own (M rows of
                               agents at once): encode, per round message (the sender's side) and receive (the
                               receiver's side), act. docs/deploy.md has the message flow.
@@ -34,19 +36,20 @@ Target = Callable[[Tensor], Tensor]
 
 
 class TeamPolicy(nn.Module):
-    """agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) long -> target action (B, N, A)."""
+    """agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) long -> (target action, raw action), (B, N, A) each."""
 
     def __init__(self, policy: CommTransformer, target: Target):
         super().__init__()
         self.policy, self.target = policy, target
 
-    def forward(self, agent: Tensor, rel: Tensor, picks: Tensor) -> Tensor:
+    def forward(self, agent: Tensor, rel: Tensor, picks: Tensor) -> tuple[Tensor, Tensor]:
         h = torch.relu(self.policy.embed(agent))
         x = h
         for r, layer in enumerate(self.policy.rounds):
             pk = picks[:, r]
             x, _ = layer.picked_round(x, h, rel, pk, dedup_valid_traced(pk))
-        return self.target(self.policy.head(x))
+        raw = self.policy.head(x)
+        return self.target(raw), raw
 
 
 class AgentEncode(nn.Module):
@@ -86,23 +89,24 @@ class AgentReceive(nn.Module):
 
 
 class AgentAct(nn.Module):
-    """y (M, D) the last round's output -> the target action (M, A)."""
+    """y (M, D) the last round's output -> (the target action, the raw action), (M, A) each."""
 
     def __init__(self, policy: CommTransformer, target: Target):
         super().__init__()
         self.head, self.target = policy.head, target
 
-    def forward(self, y: Tensor) -> Tensor:
-        return self.target(self.head(y).unsqueeze(0))[0]  # targets are written for (B, N, A)
+    def forward(self, y: Tensor) -> tuple[Tensor, Tensor]:
+        raw = self.head(y)
+        return self.target(raw.unsqueeze(0))[0], raw  # targets are written for (B, N, A)
 
 
-def _onnx(module: nn.Module, args: tuple, names: list[str], dynamic: dict[str, dict[int, str]], out: str,
-          path: Path) -> None:
+def _onnx(module: nn.Module, args: tuple, names: list[str], dynamic: dict[str, dict[int, str]],
+          out: str | list[str], path: Path) -> None:
     buf = io.BytesIO()
     with warnings.catch_warnings():  # the tracer's notes are expected (shapes read as ints, the legacy exporter)
         warnings.simplefilter("ignore")
         torch.onnx.export(module.eval(), args, buf, dynamo=False, opset_version=OPSET, input_names=names,
-                          output_names=[out], dynamic_axes=dynamic)
+                          output_names=[out] if isinstance(out, str) else out, dynamic_axes=dynamic)
     atomic_write_bytes(path, buf.getvalue())
 
 
@@ -121,7 +125,7 @@ def export_policy(policy: CommTransformer, target: Target, agent: Tensor, rel: T
     atomic_write_bytes(folder / "policy.pt", buf.getvalue())
     _onnx(team, args, ["agent", "rel", "picks"],
           {"agent": {0: "B", 1: "N"}, "rel": {0: "B", 1: "N", 2: "N"}, "picks": {0: "B", 2: "N", 3: "K"},
-           "action": {0: "B", 1: "N"}}, "action", folder / "policy.onnx")
+           "action": {0: "B", 1: "N"}, "raw": {0: "B", 1: "N"}}, ["action", "raw"], folder / "policy.onnx")
     files = ["policy.pt", "policy.onnx"]
     d = policy.embed.out_features
     s = agent[0].cpu()  # (N, Ds): N rows as M agents
@@ -138,7 +142,8 @@ def export_policy(policy: CommTransformer, target: Target, agent: Tensor, rel: T
               {"x": {0: "M"}, "h": {0: "M"}, "o_ij": {0: "M", 1: "K"}, "m": {0: "M", 1: "K"},
                "valid": {0: "M", 1: "K"}, "y": {0: "M"}}, "y", folder / "agent" / f"receive{r + 1}.onnx")
         files += [f"agent/message{r + 1}.onnx", f"agent/receive{r + 1}.onnx"]
-    _onnx(AgentAct(policy, target), (x,), ["y"], {"y": {0: "M"}, "action": {0: "M"}}, "action",
+    _onnx(AgentAct(policy, target), (x,), ["y"], {"y": {0: "M"}, "action": {0: "M"}, "raw": {0: "M"}},
+          ["action", "raw"],
           folder / "agent" / "act.onnx")
     files.append("agent/act.onnx")
     return files

@@ -102,8 +102,11 @@ class Agent:
         self.x.append(y)
 
     def act(self):
-        """The action (A,) as the task applies it, from the last round's output."""
-        return self.team.act.run(None, {"y": self.x[-1]})[0][0]
+        """The action (A,) as the task applies it, from the last round's output; ``self.raw`` keeps the
+        transformer's output before the task's target (what a simulator's Task.step takes)."""
+        action, raw = self.team.act.run(None, {"y": self.x[-1]})
+        self.raw = raw[0]
+        return action[0]
 
 
 def team_step(team: Export, agents, agent_obs, rel_obs, uniforms=None, picks=None):

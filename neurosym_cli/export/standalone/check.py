@@ -191,7 +191,7 @@ def check_torchscript(folder: Path, g: Golden, tol: float) -> str:
     worst = 0.0
     with torch.no_grad():
         for e in g.episodes:
-            out = m(*(torch.from_numpy(g[f"e{e}_{k}"]) for k in ("agent", "rel", "picks"))).numpy()
+            out = m(*(torch.from_numpy(g[f"e{e}_{k}"]) for k in ("agent", "rel", "picks")))[0].numpy()
             worst = max(worst, compare_actions("policy.pt", e, out, g[f"e{e}_action"], tol))
     return f"actions agree, max |diff| {worst:.2g} <= {tol:g}"
 
