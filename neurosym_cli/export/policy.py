@@ -121,7 +121,9 @@ def export_policy(policy: CommTransformer, target: Target, agent: Tensor, rel: T
         warnings.simplefilter("ignore")
         traced = torch.jit.trace(team, args, check_trace=False)
     buf = io.BytesIO()
-    torch.jit.save(traced, buf)
+    with warnings.catch_warnings():  # TorchScript is deprecated in favour of torch.export, still what robots load
+        warnings.simplefilter("ignore")
+        torch.jit.save(traced, buf)
     atomic_write_bytes(folder / "policy.pt", buf.getvalue())
     _onnx(team, args, ["agent", "rel", "picks"],
           {"agent": {0: "B", 1: "N"}, "rel": {0: "B", 1: "N", 2: "N"}, "picks": {0: "B", 2: "N", 3: "K"},
