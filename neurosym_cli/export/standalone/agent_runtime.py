@@ -87,8 +87,9 @@ class Agent:
 
     def receive(self, r, picks, messages):
         """Round r's update from the answers ``messages`` {j: (D,)} of the agents in ``picks`` (one slot per rule,
-        -1 for nobody; an agent in two slots is heard once)."""
-        picks = list(picks) or [-1]  # a round that asks nobody still has one (empty) slot
+        -1 for nobody; an agent in two slots is heard once). An asked agent with no answer (a lost message) is
+        not heard, as neurosym's link-failure model has it."""
+        picks = [p if p in messages else -1 for p in picks] or [-1]  # a round asking nobody: one empty slot
         valid = valid_slots(picks)
         d = self.h.shape[-1]
         o_ij = np.zeros((1, len(picks), self.others.shape[-1]), np.float32)
