@@ -8,7 +8,8 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
     layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode plotting viz   checkpoints; one batched rollout; a recorded episode; figures
-    layer 4: training evaluation synth           the training loop; the evaluation protocol; program search
+    layer 4: training evaluation synth export    the training loop; the evaluation protocol; program search;
+                                                 artifacts that run without neurosym
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
     layer 7: cli api                             the console script; the Python API (neurosym.api)

@@ -79,7 +79,7 @@ def test_export_then_check_passes_without_neurosym(runs, task, kind):
 def test_the_exported_code_reads_like_the_program(runs):
     """One function per rule with the rule's text above it, features named, in Python and in C."""
     cfg, out = exported(runs, "two-groups-cross", "prog")
-    text = ns.load_program(os.path.join(cfg.exp_dir, "synth", "k5-lam0.5-v1", "program.txt"))
+    text = ns.parse(json.loads(open(f"{out['folder']}/program.json").read())["text"])
     from neurosym_cli.dsl.printer import rule_text
 
     py = open(f"{out['folder']}/program.py").read()
