@@ -28,7 +28,10 @@ def _features(program: Program, vocab: FeatureSet, task: str) -> list[str]:
 def readme(manifest: dict, golden: dict, program: Program | None, vocab: FeatureSet | None, cfg, task) -> str:
     m = manifest
     ds, dp, a, rounds = m["agent_dim"], m["pair_dim"], m["action_dim"], m["rounds"]
-    doc = (getattr(type(task), "__doc__", "") or "").strip().split("\n\n")[0].replace("\n", " ")
+    # the first docstring up the task's classes that says what s_i is (formation.py, unlabeled_goals.py do)
+    docs = [c.__doc__ or "" for c in type(task).__mro__]
+    doc = next((d for d in docs if "s_i" in d), docs[0]).strip().split("\n\n")[0]
+    doc = " ".join(doc.split())
     out = [f"# Export of `{m['baseline']}` on `{m['task']}`", "",
            f"Made by `neurosym export` from the run of task {m['task']}, budget {m['budget']}, training seed "
            f"{m['seed']}, features {m['features']}. Nothing here imports neurosym. Check the folder on any machine "
