@@ -14,7 +14,7 @@ from __future__ import annotations
 import keyword
 from dataclasses import dataclass
 
-from ..dsl.ast import And, ArgMaxRule, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond, rule_features
+from ..dsl.ast import And, Cond, Linear, Or, Program, RandomRule, Rule, Test, TrueCond, rule_features
 from ..dsl.printer import describe, fmt_float, rule_text, to_text
 from ..dsl.vocabulary import Feature, FeatureSet
 from . import SEMANTICS
