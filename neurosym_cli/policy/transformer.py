@@ -124,23 +124,33 @@ class CommRound(nn.Module):
         b, n, k = picks.shape
         p = rel.shape[-1]  # Dp
         idx = picks.clamp(min=0)
+        # the logits before the messages: the order the graph is built in is the order autograd sums gradients
+        # into the state, and every checkpoint was trained with this one
+        q = self.query(h) * self.scale  # (B, N, D)
         o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, p))  # (B, N, K, Dp): receiver i's view of j
+        logits = self.picked_logits(q, o_ij)  # (B, N, K)
         # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
         send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
         o_ji = rel.reshape(b, n * n, p).gather(1, send.expand(-1, -1, p)).view(b, n, k, p)
         v = self.value(x)  # (B, N, D)
         v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
-        return self.receive(x, h, o_ij, self.message(v_j, o_ji), valid)
+        return self.combine(x, logits, self.message(v_j, o_ji), valid)
+
+    def picked_logits(self, q: Tensor, o_ij: Tensor) -> Tensor:
+        """q (..., D) the receiver's scaled query, o_ij (..., K, Dp) its views of the K asked -> logits (..., K)."""
+        return (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(-2)).sum(-1)
+
+    def combine(self, x: Tensor, logits: Tensor, messages: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
+        """Round input x (..., D), logits (..., K), messages (..., K, D), valid (..., K) -> output (..., D), weights."""
+        agg, attn_k = self.attend(logits, valid, messages)  # (..., D), (..., K)
+        return self._post(x, agg), attn_k
 
     def receive(self, x: Tensor, h: Tensor, o_ij: Tensor, messages: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
         """What receiver i does with the messages of the K agents it asked: x (..., D) its round input, h (..., D)
         its state embedding, o_ij (..., K, Dp) its views of them, messages (..., K, D) theirs (``message``), valid
-        (..., K) bool which slots count -> its round output (..., D) and the weights (..., K). The same code serves
-        the batched team and one agent on its own (policy export)."""
-        q = self.query(h) * self.scale  # (..., D)
-        logits = (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(-2)).sum(-1)  # (..., K)
-        agg, attn_k = self.attend(logits, valid, messages)  # (..., D), (..., K)
-        return self._post(x, agg), attn_k
+        (..., K) bool which slots count -> its round output (..., D) and the weights (..., K). The same code as the
+        batched team's round (picked_logits, combine), for one agent on its own (policy export)."""
+        return self.combine(x, self.picked_logits(self.query(h) * self.scale, o_ij), messages, valid)
 
     def _post(self, x: Tensor, agg: Tensor) -> Tensor:
         """(B, N, D) round input and aggregate -> round output y = finish(x + W_o agg + b_o)."""
