@@ -14,7 +14,6 @@ the policy's forward and the backward separately; VMAS's share of step is the si
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import sys
 import time

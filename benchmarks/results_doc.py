@@ -374,6 +374,54 @@ def draw_stress(task: str) -> None:
         print(f"drew {DOCS / 'figures' / (task + '-stress.png')}")
 
 
+def vmas(task: str) -> str:
+    """A VMAS scenario's run (docs/results/vmas-<scenario>.json, written by the run in docs/vmas.md): the table with
+    the 95 % t interval over the evaluation seeds, the program with its reading, and the claims checked on it."""
+    f = RESULTS / f"vmas-{task.split('/')[-1]}.json"
+    if not f.exists():
+        return f"Not yet run: no result file `{f.relative_to(DOCS)}`."
+    r = json.loads(f.read_text())
+    b = r["baselines"]
+    order = [k for k in ORDER if k in b] + sorted(k for k in b if k not in ORDER)
+
+    def ci(k: str) -> tuple[float, float]:
+        return mean_ci(list(b[k]["per_seed_cost"]))
+
+    n_seeds = len(next(iter(b.values()))["per_seed_cost"])
+    extra = [m for m in ("on_goal", "covered", "collisions") if m in next(iter(b.values()))["summary"]]
+    out = [f"`{r['command']}` (training seed {r['training_seed']}; {n_seeds} evaluation seeds). Loss: mean ± 95 % "
+           "Student-t interval over the evaluation seeds of this one trained model; degrees and the task's own "
+           "metrics: means.", "",
+           "| baseline | loss | max in-degree | max out-degree | " + " | ".join(extra) + " |",
+           "|---|---:|---:|---:|" + "---:|" * len(extra)]
+    for k in order:
+        m, h = ci(k)
+        sm = b[k]["summary"]
+        out.append(f"| {b[k]['label']} | {m:.2f} ± {h:.2f} | {sm['max_in']['mean']:.2f} | {sm['max_out']['mean']:.2f} | "
+                   + " | ".join(f"{sm[e]['mean']:.3f}" for e in extra) + " |")
+    text = "\n".join(ln for ln in r["program"].splitlines() if not ln.startswith("#"))
+    out += ["", "The synthesized program:", "", "```", text, "```", ""]
+    v = vocab(task, "v1")
+    for rules in parse(text).rounds:
+        out += [f"- rule {k}: {describe(rule, v)}" for k, rule in enumerate(rules, start=1)]
+    if all(x in b for x in ("tf-full", "no-comm", "prog-retrained")):
+        (tf, tfh), (nc, nch), (pr, prh) = ci("tf-full"), ci("no-comm"), ci("prog-retrained")
+        comm_matters = tf + tfh < nc - nch  # the oracle's interval lies below no-comm's
+        close = abs(pr - tf) <= 0.05 * abs(tf)
+        sparse = b["prog-retrained"]["summary"]["max_degree"]["mean"] < b["tf-full"]["summary"]["max_degree"]["mean"]
+        out += ["", "Claims of the paper, checked the same way as for its tasks:",
+                f"- communication matters (tf-full below no-comm, intervals apart): {tf:.2f} vs {nc:.2f} -> "
+                f"**{'supported' if comm_matters else 'not supported'}**",
+                f"- prog-retrained within 5 % of tf-full: {pr:.2f} vs {tf:.2f} ({100 * (pr - tf) / tf:+.1f} %) -> "
+                f"**{'supported' if close else 'not supported'}**",
+                f"- prog-retrained with a smaller max degree than tf-full -> **{'supported' if sparse else 'not supported'}**"]
+        if not comm_matters:
+            out.append("- Where hearing nobody is as good as hearing everybody, the second and third claims say "
+                       "nothing about the method: the search's best program is then the silent one "
+                       "(docs/vmas.md, 'Results', says why and what budget would make it a test).")
+    return "\n".join(out)
+
+
 def stress(task: str) -> str:
     """The stress-<task>.json section: one table per axis (loss / max in / max out per baseline), the figure."""
     st = json.loads((RESULTS / f"stress-{task}.json").read_text())
@@ -899,6 +947,7 @@ def render(template: str, variants: dict[str, dict], run: dict, seed_runs: dict 
         "run": lambda key, d: fmt(run[key], d),
         "selection": lambda t: selection(t, variants),
         "stress": lambda t: stress(t),
+        "vmas": lambda t: vmas(t),
         "rl": lambda t: rl(t, variants),
         "noisy": lambda t, clean: noisy(t, clean),
         "seeds": lambda: seeds_section(by_task),

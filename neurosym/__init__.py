@@ -7,7 +7,7 @@ made of (neurosym_cli/tasks). docs/extending.md walks through both.
 """
 
 from neurosym_cli import __version__
-from neurosym_cli.api import compose, evaluate, load_program, picks, pipeline, retrain, synth, task, train
+from neurosym_cli.api import compose, evaluate, export, load_program, picks, pipeline, retrain, synth, task, train
 from neurosym_cli.config import RunConfig, TaskConfig
 from neurosym_cli.dsl import Program, describe, parse, to_text
 from neurosym_cli.dsl.vocabulary import Feature, FeatureSet, product_features, vector_features
@@ -19,6 +19,6 @@ from . import tasks  # noqa: E402  (neurosym.tasks: the helpers a task module us
 
 __all__ = ["CAPABILITIES", "ConfigError", "Feature", "FeatureMap", "FeatureSet", "FeatureView", "Observation",
            "Program", "Rng", "RunConfig", "Scene", "Task", "TaskConfig", "TaskState", "UserError", "__version__",
-           "compose", "custom_map", "describe", "evaluate", "load_program", "make_task", "parse", "picks",
+           "compose", "custom_map", "describe", "evaluate", "export", "load_program", "make_task", "parse", "picks",
            "pipeline", "product_features", "retrain", "synth", "task", "tasks", "to_text", "train", "vector_features",
            "vector_map"]

@@ -8,9 +8,10 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
     layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode viz       checkpoints; one batched rollout; a recorded episode; pictures
-    layer 4: training evaluation synth schemes plotting overrides seeds  the training loop; the evaluation
+    layer 4: training evaluation synth schemes plotting overrides seeds export  the training loop; the evaluation
                                                  protocol; program search; the baselines' registry; figures;
-                                                 override checks; results across training seeds
+                                                 override checks; results across training seeds; artifacts that
+                                                 run without neurosym
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
     layer 7: cli api                             the console script; the Python API (neurosym.api)

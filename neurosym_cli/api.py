@@ -27,7 +27,7 @@ from .dsl.ast import Program
 from .stages import RunInfo
 
 COMMANDS = ("train", "synth", "retrain", "eval", "pipeline", "select", "show_program", "stress", "rl", "render",
-            "figures", "report")
+            "figures", "report", "export")
 
 
 def _value(v: Any) -> str:
@@ -142,6 +142,18 @@ def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
 
     with _quiet(verbose):
         return run_pipeline(dataclasses.replace(cfg, cmd="pipeline"), RunInfo(multirun=not verbose))
+
+
+def export(cfg: RunConfig, baseline: str | None = None, check: bool = False, verbose: bool = False) -> dict:
+    """`neurosym export`: the baseline's program (JSON, Python, C), policy (TorchScript, ONNX) and golden vectors
+    into <exp_dir>/export/<label>/ (``cfg.export.dir``); ``check=True`` replays an export in a process without
+    neurosym and raises UserError naming the first mismatch. Returns what was written, or the check's report."""
+    from .stages.export import export as run
+
+    c = _with(cfg, "export", baseline)
+    c = dataclasses.replace(c, export=dataclasses.replace(c.export, check=check or c.export.check))
+    with _quiet(verbose):
+        return run(c, RunInfo(multirun=not verbose))
 
 
 def load_program(path: str | Path) -> Program:

@@ -31,6 +31,8 @@ EXAMPLES = """examples:
   neurosym pipeline -m seed=0,1,2 budget=paper hydra/launcher=slurm hydra.launcher.partition=cpu
   neurosym render task=two-groups-cross episode=2   # an episode as a GIF and a PNG (render.format=mp4)
   neurosym figures task=two-groups-cross            # attention maps, group paths, rule regions
+  neurosym export task=two-groups-cross             # program as JSON/Python/C, policy as ONNX, golden vectors
+  neurosym export task=two-groups-cross --check     # replay them in a process without neurosym
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running
 """
@@ -337,6 +339,8 @@ def _main() -> None:
     if cmd not in COMMANDS:
         print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
         raise SystemExit(2)
+    if cmd == "export":  # `neurosym export --check`: Hydra has no flags of its own for a verb, so it is an override
+        rest = ["export.check=true" if a == "--check" else a for a in rest]
     from neurosym_cli.errors import UserError
     from neurosym_cli.overrides import check
     from neurosym_cli.tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas

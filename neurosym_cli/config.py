@@ -14,7 +14,7 @@ from typing import Any, Optional
 from .baselines import BaselineConfig
 from .errors import ConfigError, UserError, check as _check, check_finite, check_name, lies_under  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import cpu as _cpu
-from .verb_config import RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
+from .verb_config import ExportConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
 
@@ -214,7 +214,7 @@ class RunConfig:
     features: str = "v1"
     """program feature map: v1 (vectors, norms, angles) or v2 (plus quadratic terms)"""
     program: str = ""
-    """show-program: path of a program file (empty: the one synth wrote for this config)"""
+    """show-program, eval, export: path of a program file (empty: the one synth wrote for this config)"""
     report_dir: str = ""
     """report: a directory to aggregate (empty: <runs_root>/<task>/<budget>)"""
     device: str = "auto"
@@ -261,6 +261,7 @@ class RunConfig:
     report: ReportConfig = field(default_factory=ReportConfig)
     stress: StressConfig = field(default_factory=StressConfig)
     rl: RLConfig = field(default_factory=RLConfig)
+    export: ExportConfig = field(default_factory=ExportConfig)
     selected: bool = False
     """take rules, lam, features and the search settings from the choice `neurosym select` recorded in
     <exp_dir>/select/selected.json (pipeline: run the selection first when there is none)"""

@@ -1,5 +1,5 @@
-"""Typed schemas of the verbs beyond the paper's main protocol: render and figures, select, report, stress, and the rl
-baseline with its verb (stdlib only). ``config.RunConfig`` holds one of each; the schemas of training, search and
+"""Typed schemas of the verbs beyond the paper's main protocol: render and figures, select, report, stress, export,
+and the rl baseline with its verb (stdlib only). ``config.RunConfig`` holds one of each; the schemas of training, search and
 evaluation live in config.py."""
 
 from __future__ import annotations
@@ -105,6 +105,26 @@ class StressConfig:
         _check(all(0.0 <= f < 1.0 for f in self.failure), "stress.failure must hold rates in [0, 1)")
         _check(self.seeds > 0, f"stress.seeds must be positive, got {self.seeds}")
         _check(bool(self.agents or self.failure), "stress.agents and stress.failure are both empty")
+
+
+@dataclass
+class ExportConfig:
+    """`neurosym export`: a baseline's program and policy as artifacts that run without neurosym (docs/deploy.md)."""
+
+    check: bool = False
+    """replay the folder's golden vectors through every artifact in a process that cannot import neurosym,
+    instead of exporting (`neurosym export --check` is the same)"""
+    episodes: int = 3
+    """evaluation episodes recorded as golden vectors (the protocol's episodes 0, 1, ...; a program exported
+    without a trained model: the first step of at least 8 episodes)"""
+    tolerance: float = 1e-5
+    """the largest absolute difference of an action component the check accepts (picks must agree exactly)"""
+    dir: str = ""
+    """the export folder (empty: <exp_dir>/export/<baseline label>)"""
+
+    def __post_init__(self) -> None:
+        _check(self.episodes >= 1, f"export.episodes must be at least 1, got {self.episodes}")
+        _check(self.tolerance > 0, f"export.tolerance must be positive, got {self.tolerance}")
 
 
 @dataclass

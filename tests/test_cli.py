@@ -70,7 +70,7 @@ def test_resume_extend_and_already_done(tmp_path):
     hist = (tmp_path / "two-groups-cross/tiny/seed0/train/oracle/history.csv").read_text().splitlines()
     assert len(hist) == 5
     p = run(["train", "task=two-groups-cross", "budget=tiny", "model.width=8"], tmp_path, check=False)
-    assert p.returncode != 0 and "different `model` config" in p.stderr and "Traceback" not in p.stderr
+    assert p.returncode != 0 and "trained with model.width=16, this run has 8" in p.stderr and "Traceback" not in p.stderr
 
 
 def test_interrupted_train_resumes(tmp_path):

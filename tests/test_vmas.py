@@ -11,7 +11,6 @@ from importlib.util import find_spec
 import pytest
 import torch
 
-from conftest import ROOT
 from test_plugins import one_line, run
 
 needs_vmas = pytest.mark.skipif(find_spec("vmas") is None,

@@ -92,6 +92,15 @@ def dedup_valid(picks: Tensor) -> Tensor:
     return torch.stack(valid, -1)
 
 
+def dedup_valid_traced(picks: Tensor) -> Tensor:
+    """The same as ``dedup_valid``, as one (..., K, K) comparison instead of a loop over K: a traced graph (policy
+    export) then serves any K. Slower in eager mode."""
+    k = picks.shape[-1]
+    earlier = torch.ones(k, k, dtype=torch.bool, device=picks.device).tril(-1)  # [k, m]: m is an earlier rule
+    dup = ((picks.unsqueeze(-1) == picks.unsqueeze(-2)) & earlier).any(-1)
+    return (picks >= 0) & ~dup
+
+
 def picks_to_mask(picks: Tensor, n: int) -> Tensor:
     """picks: (B, N, K) long with -1 for none -> (B, N, N) bool union of the picks."""
     b = picks.shape[0]

@@ -40,7 +40,7 @@ reach the recursive printer and evaluator"""
 
 @dataclass
 class _Tok:
-    kind: str  # num, name, op, end
+    lex: str  # the lexical class: num, name, op, end
     text: str
     col: int  # 1-based
 
@@ -60,8 +60,8 @@ def _tokenize(line: str, lineno: int, source: str) -> list[_Tok]:
         m = _TOKEN.match(line, pos)
         if not m:
             raise ProgramSyntaxError(f"unexpected character {line[pos]!r}", lineno, pos + 1, source)
-        kind = m.lastgroup or "op"
-        toks.append(_Tok(kind, m.group(kind), m.start(kind) + 1))
+        lex = m.lastgroup or "op"
+        toks.append(_Tok(lex, m.group(lex), m.start(lex) + 1))
         pos = _SPACE.match(line, m.end()).end()
     toks.append(_Tok("end", "", len(line.rstrip()) + 1))
     return toks
@@ -76,18 +76,18 @@ class _LineParser:
 
     def fail(self, msg: str, tok: _Tok | None = None) -> ProgramSyntaxError:
         tok = tok or self.peek()
-        found = "end of line" if tok.kind == "end" else _shown(tok.text)
+        found = "end of line" if tok.lex == "end" else _shown(tok.text)
         return ProgramSyntaxError(f"{msg}, found {found}", self.lineno, tok.col, self.source)
 
     def expect(self, text: str) -> _Tok:
         tok = self.peek()
-        if tok.text != text or tok.kind == "end":
+        if tok.text != text or tok.lex == "end":
             raise self.fail(f"expected {text!r}")
         self.i += 1
         return tok
 
     def accept(self, text: str) -> bool:
-        if self.peek().text == text and self.peek().kind != "end":
+        if self.peek().text == text and self.peek().lex != "end":
             self.i += 1
             return True
         return False
@@ -95,7 +95,7 @@ class _LineParser:
     def number(self) -> float:
         neg = self.accept("-")
         tok = self.peek()
-        if tok.kind != "num":
+        if tok.lex != "num":
             raise self.fail("expected a number")
         self.i += 1
         v = self.finite(tok)
@@ -110,14 +110,14 @@ class _LineParser:
 
     def term(self, sign: float) -> tuple[str, float]:
         tok = self.peek()
-        if tok.kind == "num":
+        if tok.lex == "num":
             w = self.finite(tok)
             self.i += 1
             self.expect("*")
             tok = self.peek()
         else:
             w = 1.0
-        if tok.kind != "name" or tok.text in ("and", "or", "true", "l"):
+        if tok.lex != "name" or tok.text in ("and", "or", "true", "l"):
             raise self.fail("expected a feature name")
         self.i += 1
         return tok.text, sign * w
@@ -125,7 +125,7 @@ class _LineParser:
     def linear(self) -> Linear:
         start = self.peek()
         terms = [self.term(-1.0 if self.accept("-") else 1.0)]
-        while self.peek().text in ("+", "-") and self.peek().kind == "op":
+        while self.peek().text in ("+", "-") and self.peek().lex == "op":
             sign = -1.0 if self.peek().text == "-" else 1.0
             self.i += 1
             terms.append(self.term(sign))
@@ -135,10 +135,10 @@ class _LineParser:
         return Linear(tuple(terms))
 
     def atom(self, depth: int) -> Cond:
-        if self.peek().kind == "name" and self.peek().text == "true":
+        if self.peek().lex == "name" and self.peek().text == "true":
             self.i += 1
             return TrueCond()
-        if self.peek().text == "(" and self.peek().kind == "op":
+        if self.peek().text == "(" and self.peek().lex == "op":
             self.nest(depth)
             self.i += 1
             c = self.cond(depth + 1)
@@ -157,7 +157,7 @@ class _LineParser:
 
     def conj(self, depth: int) -> Cond:
         c = self.atom(depth)
-        while self.peek().kind == "name" and self.peek().text == "and":
+        while self.peek().lex == "name" and self.peek().text == "and":
             depth += 1
             self.nest(depth)
             self.i += 1
@@ -166,7 +166,7 @@ class _LineParser:
 
     def cond(self, depth: int = 0) -> Cond:
         c = self.conj(depth)
-        while self.peek().kind == "name" and self.peek().text == "or":
+        while self.peek().lex == "name" and self.peek().text == "or":
             depth += 1
             self.nest(depth)
             self.i += 1
@@ -203,7 +203,7 @@ class _LineParser:
             r = RandomRule(cond)
         else:
             raise self.fail("expected a rule: argmax(map(...)) or random(filter(...))")
-        if self.peek().kind != "end":
+        if self.peek().lex != "end":
             raise self.fail("expected end of line after the rule")
         return r
 
@@ -224,11 +224,11 @@ def parse(text: str, source: str = "<program>") -> Program:
             p = _LineParser(toks, lineno, source)
             p.i = 1
             num = p.peek()
-            if num.kind != "num" or not num.text.isdigit() or int(num.text) != len(rounds) + 1:
+            if num.lex != "num" or not num.text.isdigit() or int(num.text) != len(rounds) + 1:
                 raise p.fail(f"expected round number {len(rounds) + 1}")
             p.i += 1
             p.expect(":")
-            if p.peek().kind != "end":
+            if p.peek().lex != "end":
                 raise p.fail("expected end of line after the round header")
             rounds.append([])
             continue

@@ -110,23 +110,47 @@ class CommRound(nn.Module):
         the same function as ``aggregate(x, logits(h, rel), mask)`` computed on the picked pairs only.
         Returns the round output (B, N, D), the weights (B, N, N) and the mask (B, N, N) bool."""
         b, n, k = picks.shape
-        p = rel.shape[-1]  # Dp
         valid = dedup_valid(picks) if k else torch.zeros_like(picks, dtype=torch.bool)  # (B, N, K)
         mask = picks_to_mask(torch.where(valid, picks, -1), n)
         if k == 0:  # nobody is heard: the aggregate is zero and no logit or message is needed
             return self._post(x, torch.zeros_like(x)), torch.zeros(b, n, n, device=x.device), mask
+        y, attn_k = self.picked_round(x, h, rel, picks, valid)
+        attn = torch.zeros(b, n, n, device=x.device).scatter_add(-1, picks.clamp(min=0), attn_k)  # repeats: 0
+        return y, attn, mask
+
+    def picked_round(self, x: Tensor, h: Tensor, rel: Tensor, picks: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
+        """The sparse round's output (B, N, D) and weights over the picks (B, N, K), for K >= 1 picks (B, N, K) and
+        which of them count, ``valid`` (B, N, K) bool (dedup_valid). What policy export traces (no mask built)."""
+        b, n, k = picks.shape
+        p = rel.shape[-1]  # Dp
         idx = picks.clamp(min=0)
+        # the logits before the messages: the order the graph is built in is the order autograd sums gradients
+        # into the state, and every checkpoint was trained with this one
         q = self.query(h) * self.scale  # (B, N, D)
         o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, p))  # (B, N, K, Dp): receiver i's view of j
-        logits = (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(2)).sum(-1)  # (B, N, K)
+        logits = self.picked_logits(q, o_ij)  # (B, N, K)
         # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
         send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
         o_ji = rel.reshape(b, n * n, p).gather(1, send.expand(-1, -1, p)).view(b, n, k, p)
         v = self.value(x)  # (B, N, D)
         v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
-        agg, attn_k = self.attend(logits, valid, self.message(v_j, o_ji))  # (B, N, D), (B, N, K)
-        attn = torch.zeros(b, n, n, device=x.device).scatter_add(-1, idx, attn_k)  # repeats carry weight 0
-        return self._post(x, agg), attn, mask
+        return self.combine(x, logits, self.message(v_j, o_ji), valid)
+
+    def picked_logits(self, q: Tensor, o_ij: Tensor) -> Tensor:
+        """q (..., D) the receiver's scaled query, o_ij (..., K, Dp) its views of the K asked -> logits (..., K)."""
+        return (torch.relu(self.key_edge(o_ij)) * q.unsqueeze(-2)).sum(-1)
+
+    def combine(self, x: Tensor, logits: Tensor, messages: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
+        """Round input x (..., D), logits (..., K), messages (..., K, D), valid (..., K) -> output (..., D), weights."""
+        agg, attn_k = self.attend(logits, valid, messages)  # (..., D), (..., K)
+        return self._post(x, agg), attn_k
+
+    def receive(self, x: Tensor, h: Tensor, o_ij: Tensor, messages: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
+        """What receiver i does with the messages of the K agents it asked: x (..., D) its round input, h (..., D)
+        its state embedding, o_ij (..., K, Dp) its views of them, messages (..., K, D) theirs (``message``), valid
+        (..., K) bool which slots count -> its round output (..., D) and the weights (..., K). The same code as the
+        batched team's round (picked_logits, combine), for one agent on its own (policy export)."""
+        return self.combine(x, self.picked_logits(self.query(h) * self.scale, o_ij), messages, valid)
 
     def _post(self, x: Tensor, agg: Tensor) -> Tensor:
         """(B, N, D) round input and aggregate -> round output y = finish(x + W_o agg + b_o)."""

@@ -1,0 +1,146 @@
+"""`neurosym export`: a baseline's program and policy as artifacts that run without neurosym (neurosym_cli/export/,
+docs/deploy.md), into <exp_dir>/export/<baseline label>/; ``export.check=true`` replays that folder's golden
+vectors through each artifact in a process that cannot import neurosym."""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+from pathlib import Path
+
+from .. import paths
+from ..config import ConfigError, RunConfig, UserError
+from ..utils.console import log, say
+from ..utils.io import write_json, write_text
+from . import RunInfo
+
+
+def export_dir(cfg: RunConfig) -> Path:
+    """Where the export of ``cfg.baseline`` goes: export.dir, else <exp_dir>/export/<baseline label>."""
+    return Path(cfg.export.dir) if cfg.export.dir else Path(cfg.exp_dir) / "export" / paths.baseline_label(cfg)
+
+
+def export(cfg: RunConfig, info: RunInfo | None = None) -> dict:
+    """Write the export folder (or check it, with export.check=true); returns what was written or the check's
+    report."""
+    folder = export_dir(cfg)
+    if cfg.export.check:
+        return check(folder, cfg.export.tolerance)
+    if folder.exists() and not cfg.overwrite:
+        raise ConfigError(f"{folder} exists; overwrite=true replaces it (export.check=true checks it)")
+    return write_export(cfg, folder)
+
+
+def check(folder: Path, tolerance: float | None = None) -> dict:
+    from ..export.check import run_check
+
+    if not folder.exists():
+        raise UserError(f"no export at {folder}; `neurosym export` with the same settings writes it")
+    report = run_check(folder, tolerance)
+    for r in report["results"]:
+        colour = {"ok": "green", "skipped": "yellow"}.get(r["status"], "red")
+        say(f"  {r['file']:<14} [{colour}]{r['status']:<9}[/] {r['detail']}")
+    if report["neurosym_importable"]:
+        raise UserError("the check's process could import neurosym, so it proves nothing; report this as a bug")
+    if report["first_mismatch"]:
+        raise UserError(f"export check failed: {report['first_mismatch']}")
+    say(f"[green]export check passed[/] ({folder}): in a process without neurosym, tolerance "
+        f"{report['tolerance']:g}, episodes {', '.join(map(str, report['episodes']))}")
+    return report
+
+
+def _program_of(comm):
+    """The provider's program, when it is one (through a link-failure wrapper), else None."""
+    from ..policy.comm import ProgramComm
+
+    inner = getattr(comm, "inner", comm)
+    return inner if isinstance(inner, ProgramComm) else None
+
+
+def write_export(cfg: RunConfig, folder: Path) -> dict:
+    import numpy as np
+    import torch
+
+    from ..export import codegen, golden, spec
+    from ..export.policy import OPSET, export_policy
+    from ..export.readme import readme
+    from ..tasks import make_task
+    from ..utils.io import atomic_write_bytes
+    from ..utils.seeding import seed_everything
+    from .comm import baseline_comm, load_baseline
+
+    seed_everything(cfg.seed)
+    device = torch.device("cpu")  # golden vectors on the CPU: what a robot's runtime compares against
+    has_model = (paths.train_dir(cfg) / "model.pt").exists()
+    if has_model or not cfg.program:
+        policy, task, comm = load_baseline(cfg, device)
+    else:  # program=FILE with no trained model: the program alone
+        policy, task = None, make_task(cfg.task, cfg.horizon)
+        comm = baseline_comm(cfg, task)
+    prog_comm = _program_of(comm)
+    program = prog_comm.program if prog_comm is not None else None
+    if program is None and policy is None:
+        raise ConfigError("nothing to export: no program and no trained model")
+    vocab = prog_comm.fmap.vocab if prog_comm is not None else None
+    tmp = folder.parent / f".{folder.name}.tmp-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    files: list[str] = []
+    try:
+        if program is not None:
+            from ..policy.comm import ProgramComm
+
+            args = (program, vocab, cfg.task.name, cfg.features, task.obs_dim, task.pair_dim)
+            write_json(tmp / "program.json", spec.program_json(*args))
+            write_text(tmp / "program.py", codegen.python_module(*args))
+            write_text(tmp / "program.h", codegen.c_header(*args))
+            files += ["program.json", "program.py", "program.h"]
+            rec_comm = ProgramComm(program, prog_comm.fmap)  # the program alone: link failure is not exported
+        else:
+            rec_comm = comm
+        if policy is not None:
+            meta, arrays = golden.record(task, policy, rec_comm, program, cfg.export.episodes, device)
+        else:
+            meta, arrays = golden.record_program(task, rec_comm, program, max(cfg.export.episodes, 8))
+        buf = io.BytesIO()
+        np.savez_compressed(buf, **arrays)
+        atomic_write_bytes(tmp / "golden.npz", buf.getvalue())
+        write_json(tmp / "golden.json", meta)
+        files += ["golden.npz", "golden.json"]
+        if policy is not None:
+            e = 0
+            files += export_policy(policy, task.target, torch.from_numpy(arrays[f"e{e}_agent"][:1]),
+                                   torch.from_numpy(arrays[f"e{e}_rel"][:1]),
+                                   torch.from_numpy(arrays[f"e{e}_picks"][:1]), tmp)
+        standalone = Path(__file__).resolve().parents[1] / "export" / "standalone"
+        for name in ("check.py", "agent_runtime.py"):
+            shutil.copyfile(standalone / name, tmp / name)
+        files += ["check.py", "agent_runtime.py"]
+        manifest = {
+            "format": "neurosym-export/1", "task": cfg.task.name, "baseline": paths.baseline_label(cfg),
+            "budget": cfg.budget.name, "seed": cfg.seed, "features": cfg.features, "rounds": task.rounds,
+            "program": program is not None, "policy": policy is not None,
+            "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
+            "opset": OPSET if policy is not None else None, "tolerance": cfg.export.tolerance,
+            "semantics": spec.SEMANTICS if program is not None else None,
+            "files": sorted(files + ["manifest.json", "README.md"]),
+        }
+        write_json(tmp / "manifest.json", manifest)
+        write_text(tmp / "README.md", readme(manifest, meta, program, vocab, cfg, task))
+        if folder.exists():
+            shutil.rmtree(folder)
+        tmp.rename(folder)  # the folder appears complete or not at all
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    label = paths.baseline_label(cfg)
+    if program is None:
+        say(f"{label} has no program: exported the policy alone (whom to hear is an input; golden picks are the "
+            f"agents it heard)")
+    elif policy is None:
+        say(f"no trained model for {label}: exported the program alone")
+    say(f"[green]exported[/] {label} to {folder}: {', '.join(sorted(files))}")
+    say("check it in a process without neurosym: the same command with --check (or export.check=true)")
+    log.info("golden episodes: %s", ", ".join(f"{m['episode']} (loss {m.get('loss', float('nan')):.4f})"
+                                             for m in meta["episodes"]))
+    return {"folder": str(folder), "files": sorted(files), "program": program is not None,
+            "policy": policy is not None, "episodes": meta["episodes"]}
