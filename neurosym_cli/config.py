@@ -286,7 +286,8 @@ class RunConfig:
         cpus = os.cpu_count() or 1
         _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")
         n = getattr(self.task, "max_agents", None)  # the base schema (tests, defaults) has no team size
-        _check(n is None or self.rules < n, f"rules={self.rules}: an agent of {self.task.name} has at most {n} - 1 "
+        task = getattr(self.task, "name", "the task")  # RunConfig() from Python: the task is not composed yet
+        _check(n is None or self.rules < n, f"rules={self.rules}: an agent of {task} has at most {n} - 1 "
                f"others to hear (K is also the k of hard-attn and dist)")
         _check(self.features in ("v1", "v2"), f"features must be v1 or v2, got {self.features!r}")
 
