@@ -22,13 +22,15 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor
 
-from neurosym import ConfigError, Observation, Scene, TaskConfig, TaskState, vector_map
-from neurosym.tasks import Columns, clip_speed, column_feature, pairwise_distances, safe_norm
+from neurosym import ConfigError, Observation, Scene, TaskState, vector_map
+from neurosym.tasks import (Columns, PlanarConfig, clip_speed, collision_count, column_feature, pairwise_distances,
+                            relative_observation, safe_norm)
 
 
 @dataclass
-class RingConfig(TaskConfig):
-    """The ring: agents start in a box around the origin and each flies to its own slot on a circle."""
+class RingConfig(PlanarConfig):
+    """The ring: agents start in a box around the origin and each flies to its own slot on a circle. PlanarConfig
+    brings what agents in the plane share (dt, v_max, noise_std, collision_dist); the ring sets its own defaults."""
 
     _target_: str = "ring.RingTask"
     name: str = "ring"
@@ -41,10 +43,6 @@ class RingConfig(TaskConfig):
     """world units: radius of the ring of slots"""
     start_half_width: float = 1.0
     """world units: agents start uniformly in [-w, w]^2"""
-    dt: float = 0.1
-    """seconds per step"""
-    v_max: float = 2.0
-    """world units per second: speed limit"""
     noise_std: float = 0.02
     """world units: noise on the observed offsets"""
     collision_dist: float = 0.3
@@ -95,10 +93,7 @@ class RingTask:
         return [self.reset(1, g)[0] for g in gens], gens
 
     def observe(self, state: RingState, rng) -> Observation:
-        b, n = state.batch, state.n_agents
-        off = state.pos[:, None, :, :] - state.pos[:, :, None, :]  # [i, j] = x_j - x_i
-        if self.cfg.noise_std > 0:
-            off = off + self.cfg.noise_std * rng.randn(b, n, n, 2)
+        off = relative_observation(state.pos, self.cfg.noise_std, rng)  # [i, j] = x_j - x_i + noise
         dvel = state.vel[:, None, :, :] - state.vel[:, :, None, :]
         return Observation(agent=torch.cat([state.pos - state.slot, state.pos], -1), rel=torch.cat([off, dvel], -1))
 
@@ -117,9 +112,7 @@ class RingTask:
         return safe_norm(next_state.pos - next_state.slot).sum(-1) + ramp.sum((1, 2))
 
     def metrics(self, state: RingState) -> dict[str, Tensor]:
-        d = torch.cdist(state.pos, state.pos)
-        upper = torch.ones_like(d[0], dtype=torch.bool).triu(1)
-        return {"collisions": ((d < self.cfg.collision_dist) & upper).sum((1, 2)).to(d.dtype)}
+        return {"collisions": collision_count(state.pos, self.cfg.collision_dist)}
 
     def features(self, version: str):
         """my slot vector (sx sy sd stheta), my position (px ...), its offset (dx dy d theta) and dv, its speed
