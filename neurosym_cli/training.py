@@ -60,6 +60,7 @@ class FitState:
     optimizer: dict | None = None
     gen_state: torch.Tensor | None = None
     torch_rng: torch.Tensor | None = None
+    mean_return: torch.Tensor | None = None  # rl: (T,) running mean return, the baseline of one-episode buckets
 
 
 class Diverged(UserError):
@@ -118,7 +119,7 @@ def fit(
     policy.train()
     discount = spec.optim.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
     rng = Rng(gen, device)
-    mean_return = None  # rl: running mean return per step, the baseline of one-episode buckets
+    mean_return = state.mean_return  # rl: running mean return per step, the baseline of one-episode buckets
     while state.step < spec.steps:
         t0 = time.perf_counter()
         batch = min(spec.batch, spec.rollouts - state.step * spec.batch)
@@ -167,5 +168,6 @@ def fit(
             state.optimizer = opt.state_dict()
             state.gen_state = gen.get_state()
             state.torch_rng = torch.get_rng_state()
+            state.mean_return = mean_return  # part of the next step's loss: a resume without it differs
             save(state)
     return state

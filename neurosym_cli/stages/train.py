@@ -4,6 +4,7 @@ section 3.5). Both use the one training loop of ``training.fit``."""
 
 from __future__ import annotations
 
+import dataclasses
 import platform
 import time
 from typing import Callable
@@ -80,6 +81,7 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_task(cfg.task, cfg.horizon)
     probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
+    seed_everything(cfg.seed)  # a provider's own parameters (rl's gate) are drawn now: from the seed, too
     comm = with_link_failure(maker.provider(cfg, env), cfg.task.link_failure)
     if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
         payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
@@ -96,6 +98,7 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
         raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
                           f"not {cfg.baseline.name}")
     env = make_task(cfg.task, cfg.horizon)
+    seed_everything(cfg.seed)  # as in train: whatever the provider draws comes from the seed
     comm = baseline_comm(cfg, env)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
@@ -146,8 +149,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         gate.to(device)
 
     def save(st: FitState) -> None:
-        fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
-                    "gen_state": st.gen_state, "torch_rng": st.torch_rng}
+        fit_dict = dataclasses.asdict(st)  # every field a resume needs (training.FitState)
         payload = artifacts.policy_payload(policy, cfg.model, cfg.record(), fit_dict, done=st.step >= spec.steps)
         if made_under:
             payload["made_under"] = made_under
