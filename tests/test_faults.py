@@ -589,3 +589,39 @@ def test_rl_is_reproducible_and_a_kill_9_resumes_exactly(tmp_path):
     k_hist, k_w = _rl_run(killed)
     assert k_hist == a_hist
     assert all(torch.equal(a_w[k], k_w[k]) for k in a_w)
+
+
+# ------------------------------------------------------------------------------------------ issue 28, item 4
+@pytest.fixture(scope="module")
+def trained_root(tmp_path_factory):
+    """A runs root with random-grid's tiny oracle and its synthesized program (made once for this module)."""
+    root = tmp_path_factory.mktemp("trained")
+    run(["train", "task=random-grid", "budget=tiny", "threads=1"], root)
+    run(["synth", "task=random-grid", "budget=tiny", "threads=1"], root)
+    return root
+
+
+@pytest.fixture
+def runs(trained_root, tmp_path):
+    """A private copy of ``trained_root`` (a test may break its artifacts)."""
+    import shutil
+
+    shutil.copytree(trained_root, tmp_path / "runs", symlinks=True)
+    return tmp_path / "runs"
+
+
+EXP = "random-grid/tiny/seed0"
+TINY = ["task=random-grid", "budget=tiny", "threads=1"]
+
+
+def test_a_hand_written_programs_metrics_record_its_own_k(runs):
+    """Issue 28, item 2: K of a program given as program=FILE is the file's (3 rules), not the config's rules=2."""
+    import json
+
+    prog = runs / "three.txt"
+    prog.write_text("random(filter(d <= 2.0, l))\nrandom(filter(d <= 3.0, l))\nrandom(filter(gy >= -1.0, l))\n")
+    run(["eval", "baseline=prog", *TINY, f"program={prog}"], runs)
+    (out,) = (runs / EXP / "eval").glob("prog-file-three-*/metrics.json")
+    assert json.loads(out.read_text())["rules"] == 3
+    run(["eval", "baseline=prog", *TINY], runs)  # the synthesized program's is its search's K
+    assert json.loads((runs / EXP / "eval/prog-k2-lam0.5-v1/metrics.json").read_text())["rules"] == 2

@@ -142,6 +142,9 @@ class Program(Searched):
         check_program(program, cfg, str(path), fmap)
         return ProgramComm(program, fmap)
 
+    def rules(self, cfg: "RunConfig", comm: Any) -> int:
+        return comm.program.max_rules  # the file's K (program= is any file; a search may simplify rules away)
+
     def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
         from ..dsl.printer import to_text
 

@@ -31,15 +31,16 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
     out = paths.eval_dir(cfg) if label is None else paths.eval_dir(cfg).parent / label
     label = label or paths.baseline_label(cfg)
     with run_lock(out):
-        _write(cfg, info, out, label, rows, summary, seconds)
+        _write(cfg, info, out, label, rows, summary, seconds, cfg.baseline.rules(cfg, comm))
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
     return summary
 
 
-def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float) -> None:
+def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float,
+           rules: int) -> None:
     artifacts.write_csv(out / "metrics.csv", rows)
     artifacts.write_json(out / "metrics.json", {
-        "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
+        "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
         "runtime": runtime(), "config": cfg.record(),
