@@ -42,16 +42,27 @@ def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any
     return payload
 
 
+def non_finite(obj: Any, where: str = "") -> str | None:
+    """Where the first nan or inf of a payload's float tensors is (``where`` + its keys and indices, as
+    ``state_dict.w``, ``[0].rel``), or None: nested dicts, lists and tuples are searched."""
+    if isinstance(obj, torch.Tensor):
+        return where or "a tensor" if obj.is_floating_point() and not bool(torch.isfinite(obj).all()) else None
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, (list, tuple)) else ()
+    for k, v in items:
+        found = non_finite(v, f"{where}.{k}" if isinstance(k, str) else f"{where}[{k}]")
+        if found:
+            return found.lstrip(".")
+    return None
+
+
 def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
     """A policy checkpoint (weights, architecture, config, resume state); one with a nan or inf weight (a
     diverged training, saved before training refused to save them) is refused: it would evaluate as nan."""
     payload = load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
-    for part in ("state_dict", "comm_state"):
-        weights = payload.get(part)
-        if isinstance(weights, dict) and not all(bool(torch.isfinite(t).all()) for t in weights.values()
-                                                 if isinstance(t, torch.Tensor) and t.is_floating_point()):
-            raise ArtifactError(f"{path} holds non-finite weights (a diverged training); re-run `{made_by}` with "
-                                "overwrite=true and a smaller optim.lr")
+    bad = non_finite({part: payload.get(part) for part in ("state_dict", "comm_state")})
+    if bad:
+        raise ArtifactError(f"{path} holds non-finite weights ({bad}: a diverged training); re-run `{made_by}` "
+                            "with overwrite=true and a smaller optim.lr")
     return payload
 
 

@@ -625,3 +625,28 @@ def test_a_hand_written_programs_metrics_record_its_own_k(runs):
     assert json.loads(out.read_text())["rules"] == 3
     run(["eval", "baseline=prog", *TINY], runs)  # the synthesized program's is its search's K
     assert json.loads((runs / EXP / "eval/prog-k2-lam0.5-v1/metrics.json").read_text())["rules"] == 2
+
+
+def test_no_nan_from_a_finite_model_or_a_nan_dataset(runs):
+    """Issue 28, item 1: a dataset D holding a nan is never searched on (collected again), an oracle whose
+    rollouts overflow (weights finite, 1e30 times too large) is refused by synth and eval in one line, and no
+    metrics.json or program is written from it."""
+    import torch
+
+    data = runs / EXP / "synth/dataset-r4-s10.pt"
+    payload = torch.load(data, weights_only=True)
+    payload["buckets"][0]["rel"].view(-1)[0] = float("nan")
+    torch.save(payload, data)
+    p = run(["synth", *TINY, "overwrite=true"], runs)
+    assert "holds non-finite values (buckets[0].rel); collecting it again" in p.stdout + p.stderr
+    assert all(torch.isfinite(b["rel"]).all() for b in torch.load(data, weights_only=True)["buckets"])
+    ckpt = runs / EXP / "train/oracle/model.pt"
+    payload = torch.load(ckpt, weights_only=True)
+    for w in payload["state_dict"].values():
+        w.mul_(1e30)
+    torch.save(payload, ckpt)
+    data.unlink()
+    one_line_error(run(["synth", *TINY, "overwrite=true"], runs, check=False), "rollouts reached non-finite values")
+    assert not data.exists()
+    one_line_error(run(["eval", "baseline=tf-full", *TINY], runs, check=False), "gave a non-finite cost")
+    assert not (runs / EXP / "eval/tf-full").exists()

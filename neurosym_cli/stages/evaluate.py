@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 
 from .. import __version__, artifacts, paths
@@ -11,6 +12,7 @@ from ..evaluation import evaluate, summarize
 from ..utils.console import log
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
+from ..utils.io import ArtifactError
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
@@ -27,6 +29,12 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
     t0 = time.perf_counter()
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
     seconds = time.perf_counter() - t0
+    bad = next((f"{k} of seed {r['seed']}" for r in rows for k, v in r.items()
+                if isinstance(v, float) and not math.isfinite(v)), None)
+    if bad:  # finite weights whose rollouts overflow: a nan is never a result, nor written over one
+        raise ArtifactError(f"evaluating {label or paths.baseline_label(cfg)} gave a non-finite {bad}; nothing "
+                            f"written: the model's rollouts diverge, `{paths.train_command(cfg)} overwrite=true` "
+                            "trains it again (a smaller optim.lr, or smaller task scales: task.dt, task.v_max)")
     summary = summarize(rows)
     out = paths.eval_dir(cfg) if label is None else paths.eval_dir(cfg).parent / label
     label = label or paths.baseline_label(cfg)

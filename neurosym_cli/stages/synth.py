@@ -71,7 +71,8 @@ def collect_dataset(cfg: RunConfig):
     policy = artifacts.policy_from_payload(payload).to(device).eval()
     env = make_task(cfg.task, cfg.horizon)
     data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
-                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
+                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device,
+                           paths.train_command(cfg, oracle=True))
     return policy, env, data, device
 
 
