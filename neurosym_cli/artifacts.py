@@ -13,7 +13,8 @@ from typing import Any
 
 import torch
 
-from .config import ModelConfig
+from .config import ModelConfig, UserError
+from .errors import cut
 from .utils.cpu import runtime
 from .utils.io import ArtifactError, atomic_write_bytes, read_json, write_csv, write_json, write_text  # noqa: F401
 from .policy.transformer import CommTransformer
@@ -59,11 +60,35 @@ def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
     """A policy checkpoint (weights, architecture, config, resume state); one with a nan or inf weight (a
     diverged training, saved before training refused to save them) is refused: it would evaluate as nan."""
     payload = load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
+    why = _checkpoint_problem(payload)
+    if why:  # the right format tag, but keys missing or weights of other shapes: never half-loaded
+        raise ArtifactError(f"{path} is not a usable checkpoint: {why}; delete it and re-run `{made_by}`")
     bad = non_finite({part: payload.get(part) for part in ("state_dict", "comm_state")})
     if bad:
         raise ArtifactError(f"{path} holds non-finite weights ({bad}: a diverged training); re-run `{made_by}` "
                             "with overwrite=true and a smaller optim.lr")
     return payload
+
+
+_CHECKPOINT_KEYS = (("state_dict", dict), ("arch", dict), ("config", dict), ("fit", dict), ("done", bool))
+"""what every reader of a checkpoint takes from it (``policy_payload`` writes them)"""
+
+
+def _checkpoint_problem(payload: dict[str, Any]) -> str | None:
+    """Why a payload of the checkpoint format cannot be used (a key missing or of another type, weights that do
+    not fit the architecture it records), or None. The model is built and loaded strictly to find out."""
+    for key, typ in _CHECKPOINT_KEYS:
+        if not isinstance(payload.get(key), typ):
+            return f"{key!r} is missing or not a {typ.__name__}"
+    fit = payload["fit"]
+    if not (isinstance(fit.get("step"), int) and fit["step"] >= 0 and isinstance(fit.get("history"), list)):
+        return "'fit' has no step count and history"
+    try:
+        policy_from_payload(payload)
+    except (KeyError, TypeError, ValueError, RuntimeError, UserError) as e:
+        lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+        return f"its weights do not fit the architecture it records ({cut(' '.join(lines[1:2] or lines[:1]), 160)})"
+    return None
 
 
 # ------------------------------------------------------------------------------------------- policies

@@ -13,11 +13,12 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
+from ..utils.io import ArtifactError
 from ..schemes import with_run
 from ..tasks import make_task, probe
 from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module, with_link_failure
-from ..training import Diverged, FitSpec, FitState, fit
+from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
@@ -135,7 +136,11 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
                               "overwrite=true retrains it under this one")
         policy = artifacts.policy_from_payload(payload)
         load_gate(comm, payload, ckpt, paths.train_command(cfg))
-        state = FitState(**payload["fit"])
+        try:
+            state = FitState(**payload["fit"])
+        except TypeError:
+            raise ArtifactError(f"{ckpt} has a resume state of another shape; `{paths.train_command(cfg)} "
+                                "overwrite=true` trains from the start") from None
         if state.step >= spec.steps:
             log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
             return {"checkpoint": str(ckpt), "steps": state.step}
@@ -169,6 +174,9 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         try:
             state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
                         save, state)
+        except ResumeMismatch as e:
+            raise ArtifactError(f"{ckpt}: {e}; `{paths.train_command(cfg)} overwrite=true` trains from the "
+                                "start") from None
         except Diverged as e:
             raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "
                               "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None

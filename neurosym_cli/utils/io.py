@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence
 
 from ..config import UserError
-from ..errors import lies_under
+from ..errors import lies_under, resource_problem
 
 
 class ArtifactError(UserError):
@@ -46,25 +47,41 @@ def check_inside(path: Path) -> None:
         raise ArtifactError(f"refusing to write {Path(path).resolve()}: it lies outside the runs root {_ROOTS[0]}")
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``path`` so that a reader sees the old file or the new one, never a part (temp file, fsync, rename)."""
+def _write_error(path: Path, e: OSError) -> ArtifactError:
+    return ArtifactError(resource_problem(e) or f"cannot write {path}: {e.strerror or e}")
+
+
+@contextlib.contextmanager
+def atomic_file(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; renamed to ``path`` when the block ends without error, removed
+    when it fails (a full disk, Ctrl-C): a reader sees the old file or the new one, never a part. Errors of the
+    machine (no space, read-only) are one line (``errors.resource_problem``)."""
+    path = Path(path)
     check_inside(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as e:
-        raise ArtifactError(f"cannot write {path}: {e.strerror or e}") from None
-    try:
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}")
         os.fchmod(fd, _MODE)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
+        os.close(fd)
+    except OSError as e:
+        raise _write_error(path, e) from None
+    tmp = Path(name)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as f:  # what the block wrote reaches the disk before it takes the name
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    except OSError as e:
+        raise _write_error(path, e) from None
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``path`` so that a reader sees the old file or the new one, never a part (temp file, fsync, rename)."""
+    with atomic_file(path) as tmp:
+        tmp.write_bytes(data)
 
 
 def write_text(path: Path, text: str) -> None:
