@@ -57,8 +57,8 @@ def check_name(value: str, key: str) -> None:
     """Refuse a name that would not be one directory under the runs root (``name_problem``)."""
     why = name_problem(value)
     if why:
-        raise ConfigError(f"{key}={cut(repr(value))} {why}; it names a directory under runs_root, so use letters, digits, "
-                          "'-', '_' or '.'")
+        raise ConfigError(f"{key}={cut(repr(value))} {why}; it names a directory under runs_root, so use letters, "
+                          "digits, '-', '_' or '.'")
 
 
 LONGEST = 200

@@ -9,10 +9,10 @@ import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Iterator, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from ..config import UserError
-from ..errors import lies_under, resource_problem
+from ..errors import cut, lies_under, resource_problem
 
 
 class ArtifactError(UserError):
@@ -101,8 +101,31 @@ def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
     write_text(path, buf.getvalue())
 
 
-def read_json(path: Path) -> Any:
+Shape = Mapping[str, "type | tuple[type, ...]"] | Callable[[Any], bool]
+"""what a JSON record must be: an object with these fields of these types, or a test of the whole record"""
+
+
+def read_json(path: Path, remake: str | None = None, shape: Shape | None = None) -> Any:
+    """A JSON artifact; unreadable, not UTF-8, not JSON or not of ``shape`` is one ArtifactError that names
+    ``remake``, the command that writes it again (a reader never runs on a record of another shape)."""
+    again = f"; delete it and run `{remake}`, which writes it again" if remake else ""
     try:
-        return json.loads(Path(path).read_text())
+        obj = json.loads(Path(path).read_text())
     except (OSError, ValueError) as e:  # unreadable, not UTF-8, or not JSON
-        raise ArtifactError(f"cannot read {path}: {e}") from None
+        raise ArtifactError(f"cannot read {path}: {cut(e)}{again}") from None
+    if shape is None:
+        return obj
+    if callable(shape):
+        if not shape(obj):
+            raise ArtifactError(f"{path} is not a record of the shape neurosym writes{again}")
+        return obj
+    if not isinstance(obj, dict):
+        raise ArtifactError(f"{path} holds a JSON {type(obj).__name__}, not the object neurosym writes{again}")
+    for key, typ in shape.items():
+        if not isinstance(obj.get(key), typ) or isinstance(obj.get(key), bool) and bool not in _types(typ):
+            raise ArtifactError(f"{path}: {key!r} is missing or of another type than neurosym writes{again}")
+    return obj
+
+
+def _types(typ: "type | tuple[type, ...]") -> tuple[type, ...]:
+    return typ if isinstance(typ, tuple) else (typ,)
