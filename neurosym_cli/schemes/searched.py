@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -127,7 +128,7 @@ class Program(Searched):
 
     def command(self, verb: str, cfg: "RunConfig") -> str:
         if verb == "retrain" and cfg.program:
-            return self._line("retrain", cfg, self.name, f" program={cfg.program}")
+            return self._line("retrain", cfg, self.name, " " + shlex.quote(f"program={cfg.program}"))  # spaces
         return super().command(verb, cfg)
 
     def provider(self, cfg: "RunConfig", env: Any = None):
