@@ -22,10 +22,14 @@ from .policy.transformer import CommTransformer
 CHECKPOINT_FORMAT = "neurosym-policy/1"
 
 
-def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
+def checkpoint_bytes(payload: dict[str, Any]) -> bytes:
     buf = io.BytesIO()
     torch.save(payload, buf)
-    atomic_write_bytes(Path(path), buf.getvalue())
+    return buf.getvalue()
+
+
+def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
+    atomic_write_bytes(Path(path), checkpoint_bytes(payload))
 
 
 def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any]:

@@ -85,7 +85,11 @@ def resource_problem(e: BaseException) -> str | None:
     text = str(e).splitlines()[0] if str(e) else type(e).__name__
     if isinstance(e, MemoryError) or (isinstance(e, RuntimeError) and (
             "can't allocate memory" in text or "out of memory" in text.lower())):
-        return (f"out of memory ({cut(text, 160)}); a smaller team (the task's agents) or fewer rollouts at once "
+        import re
+
+        size = re.search(r"allocate (\d+) bytes", text)
+        what = f"it asked for {int(size.group(1)) / 2**30:.1f} GiB more" if size else cut(text, 120)
+        return (f"out of memory ({what}); a smaller team (the task's agents) or fewer rollouts at once "
                 "(budget.batch_rollouts, task.eval_episodes), or a machine with more memory")
     if not isinstance(e, OSError):
         return None

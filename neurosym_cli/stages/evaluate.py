@@ -12,7 +12,7 @@ from ..evaluation import evaluate, summarize
 from ..utils.console import log
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
-from ..utils.io import ArtifactError
+from ..utils.io import ArtifactError, csv_bytes, json_bytes, write_together
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
@@ -46,10 +46,9 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
 
 def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float,
            rules: int) -> None:
-    artifacts.write_csv(out / "metrics.csv", rows)
-    artifacts.write_json(out / "metrics.json", {
+    write_together({out / "metrics.csv": csv_bytes(rows), out / "metrics.json": json_bytes({
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
         "runtime": runtime(), "config": cfg.record(),
-    })
+    })})  # both or neither: a full disk never pairs a new table with an old record

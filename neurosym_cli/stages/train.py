@@ -13,7 +13,7 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
-from ..utils.io import ArtifactError
+from ..utils.io import ArtifactError, csv_bytes, write_together
 from ..schemes import with_run
 from ..tasks import make_task, probe
 from ..policy import CommTransformer
@@ -68,6 +68,22 @@ def _kept(ckpt) -> str:
     except Exception:  # the message is about the divergence; an unreadable old file only loses the step number
         return f"{ckpt} is kept as it was"
     return f"the last finite checkpoint (step {step}{'' if done else ', not marked trained'}) is kept at {ckpt}"
+
+
+def _manifest(cfg: RunConfig, info: RunInfo, out, verb: str, spec: FitSpec, state: FitState, seconds: float,
+              rollouts: int, device) -> tuple[list[dict], float]:
+    """manifest.json of a finished training; returns (the last steps' history, their mean loss)."""
+    last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
+    final = sum(h["loss"] for h in last) / len(last)
+    artifacts.write_json(out / "manifest.json", {
+        "command": verb, "version": __version__, "checkpoint": str(out / "model.pt"), "steps": state.step,
+        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
+        "final_loss_steps": len(last),
+        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
+        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
+        "hydra_dir": info.log_dir, "runtime": runtime(), "config": cfg.record(),
+    })
+    return last, final
 
 
 def train(cfg: RunConfig, info: RunInfo) -> dict:
@@ -142,7 +158,10 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             raise ArtifactError(f"{ckpt} has a resume state of another shape; `{paths.train_command(cfg)} "
                                 "overwrite=true` trains from the start") from None
         if state.step >= spec.steps:
-            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
+            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt,
+                     state.step)
+            if not (out / "manifest.json").exists():  # the run ended before its manifest (a full disk): made now
+                _manifest(cfg, info, out, verb, spec, state, 0.0, 0, device)
             return {"checkpoint": str(ckpt), "steps": state.step}
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
@@ -160,8 +179,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             payload["made_under"] = made_under
         if gate is not None:
             payload["comm_state"] = gate.state_dict()
-        artifacts.save_checkpoint(ckpt, payload)
-        artifacts.write_csv(out / "history.csv", st.history)
+        write_together({ckpt: artifacts.checkpoint_bytes(payload), out / "history.csv": csv_bytes(st.history)})
 
     label = f"{verb} {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
@@ -182,16 +200,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
                               "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
-    last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
-    final = sum(h["loss"] for h in last) / len(last)
-    artifacts.write_json(out / "manifest.json", {
-        "command": verb, "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
-        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
-        "final_loss_steps": len(last),
-        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
-        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
-        "hydra_dir": info.log_dir, "runtime": runtime(), "config": cfg.record(),
-    })
+    last, final = _manifest(cfg, info, out, verb, spec, state, seconds, rollouts, device)
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "
         f"{seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")

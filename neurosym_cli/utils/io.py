@@ -48,6 +48,7 @@ def check_inside(path: Path) -> None:
 
 
 def _write_error(path: Path, e: OSError) -> ArtifactError:
+    e.filename = e.filename or str(path)  # a failed write() names no file: the artifact it was for
     return ArtifactError(resource_problem(e) or f"cannot write {path}: {e.strerror or e}")
 
 
@@ -84,21 +85,38 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         tmp.write_bytes(data)
 
 
-def write_text(path: Path, text: str) -> None:
-    atomic_write_bytes(path, text.encode())
+def write_together(files: Mapping[Path, bytes]) -> None:
+    """Write the files of one artifact (metrics.json and metrics.csv, a checkpoint and its history) all or none:
+    each goes to its temp file first and only then are they renamed, so a full disk leaves every one as it was."""
+    with contextlib.ExitStack() as stack:
+        tmps = {path: stack.enter_context(atomic_file(path)) for path in files}
+        for path, tmp in tmps.items():
+            tmp.write_bytes(files[path])
 
 
-def write_json(path: Path, obj: Any) -> None:
-    write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+def json_bytes(obj: Any) -> bytes:
+    return (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode()
 
 
-def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
+def csv_bytes(rows: Sequence[Mapping[str, Any]]) -> bytes:
     buf = io.StringIO()
     if rows:
         w = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
         w.writeheader()
         w.writerows(rows)
-    write_text(path, buf.getvalue())
+    return buf.getvalue().encode()
+
+
+def write_text(path: Path, text: str) -> None:
+    atomic_write_bytes(path, text.encode())
+
+
+def write_json(path: Path, obj: Any) -> None:
+    atomic_write_bytes(path, json_bytes(obj))
+
+
+def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
+    atomic_write_bytes(path, csv_bytes(rows))
 
 
 Shape = Mapping[str, "type | tuple[type, ...]"] | Callable[[Any], bool]
