@@ -826,3 +826,111 @@ def test_a_checkpoint_of_other_shapes_through_the_commands(runs):
     torch.save(good, ckpt)
     one_line_error(run(["train", *TINY, "budget.train_rollouts=12"], runs, check=False),
                    "its resume state does not fit this model")
+
+
+@pytest.mark.parametrize("content", ["[1, 2]", '{"rules": "x", "lam": [], "synth": 3}', "not json", '{"a": "b"}'])
+def test_corrupt_json_artifacts_name_the_command_that_writes_them_again(runs, content):
+    """Issue 28, item 4: metrics.json, selected.json, pipeline_timings.json and summary.json corrupt or of another
+    shape or type: one line that names the command writing them again."""
+    import dataclasses
+
+    import neurosym_cli.api as ns
+    from neurosym_cli.stages.synth import read_summary
+
+    exp = runs / EXP
+    (exp / "select").mkdir()
+    (exp / "select/selected.json").write_text(content)
+    one_line_error(run(["eval", "baseline=prog", "selected=true", *TINY], runs, check=False),
+                   "delete it and run `neurosym select task=random-grid budget=tiny seed=0`")
+    (exp / "pipeline_timings.json").write_text(content)
+    one_line_error(run(["pipeline", "baselines=[tf-full]", *TINY], runs, check=False),
+                   "delete it and run `neurosym pipeline task=random-grid budget=tiny seed=0`")
+    (exp / "eval/tf-full").mkdir(parents=True)
+    (exp / "eval/tf-full/metrics.json").write_text(content)  # read by the table every eval prints
+    one_line_error(run(["eval", "baseline=prog", *TINY], runs, check=False),
+                   "delete it and run `neurosym pipeline task=random-grid budget=tiny seed=0`")
+    (exp / "synth/k2-lam0.5-v1/summary.json").write_text(content)  # select reads every round's time
+    cfg = dataclasses.replace(ns.compose("synth", task="random-grid", budget="tiny"), runs_root=str(runs),
+                              exp_dir=str(exp))
+    with pytest.raises(ArtifactError, match=r"delete it and run `neurosym synth .* overwrite=true`"):
+        read_summary(cfg)
+
+
+@pytest.mark.parametrize("arg,needle", [
+    ("seed=${oops}", "${oops} names no key of the config"),
+    ("rules=${task.rulez}", "did you mean ${task.rules}?"),
+    ("seed=${oc.env:NEUROSYM_SURELY_UNSET}", "NEUROSYM_SURELY_UNSET is not set; set it, or give a default"),
+    ("~task", "task cannot be removed"),
+    ("~budget", "budget cannot be removed"),
+    ("~seed", "seed cannot be removed"),
+    ("seed=99999999999999999999", "beyond a 64-bit integer"),
+    ("seed=-9223372036854775809", "beyond a 64-bit integer"),
+    ("task.v_max=1e308", "task.v_max must lie in"),
+    ("hydra.run.dir=${oops}", "Interpolation key 'oops' not found"),  # past our check: Hydra's own, one line
+])
+def test_interpolations_removals_and_huge_numbers_in_overrides_are_one_line(tmp_path, arg, needle):
+    one_line_error(run(["train", *TINY, arg], tmp_path, check=False), needle)
+    assert not list(tmp_path.rglob("model.pt"))
+
+
+def test_working_interpolations_still_work(tmp_path):
+    from neurosym_cli.overrides import check
+
+    os.environ.setdefault("NEUROSYM_RUNS", str(tmp_path))
+    assert check(["rules=${task.rules}", "runs_root=${oc.env:NEUROSYM_RUNS}", "seed=${oc.env:NOPE_NOPE,3}",
+                  "seed=9223372036854775807"]) is None
+
+
+@pytest.mark.parametrize("arg", ["lam=" + "9" * 20_000 + "x", "task.name=" + "x" * 20_000, "x" * 20_000 + "=1",
+                                 "runs_root=\u00e9" + "x" * 20_000])
+def test_long_values_are_cut_in_messages(tmp_path, arg):
+    """Issue 28, item 4: a 20,000-character value is quoted in part, with its length; a name that long is refused
+    (names are at most 100 characters)."""
+    p = run(["train", *TINY, arg], tmp_path, check=False)
+    assert p.returncode != 0 and "Traceback" not in p.stderr
+    assert len(p.stderr) < 1_000 and "characters)" in p.stderr, p.stderr[:2000]
+
+
+def test_the_error_edge_cuts_every_long_word():
+    from neurosym_cli.errors import cut, cut_words
+
+    msg = cut_words("cannot read " + "/a" * 10_000 + ": gone")
+    assert len(msg) < 300 and msg.endswith("... (20,001 characters) gone")  # the word with its colon
+    assert cut("short") == "short"
+
+
+def test_a_byte_order_mark_is_accepted(tmp_path):
+    text = "random(filter(d <= 2.0, l))\nrandom(filter(d <= 3.0, l))\n"
+    (tmp_path / "bom.txt").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load_program(tmp_path / "bom.txt") == parse(text)
+
+
+def test_a_program_of_20000_rules_is_refused_at_once(tmp_path):
+    """Issue 28, item 4: at most 64 rules a round (dsl/parser.MAX_RULES), refused at the 65th line in well under a
+    second, where eval would run the whole file for minutes."""
+    from neurosym_cli.dsl.parser import MAX_RULES
+
+    big = tmp_path / "big.txt"
+    big.write_text("".join(f"random(filter(d <= {k / 1000:.3f}, l))\n" for k in range(20_000)))
+    t0 = time.perf_counter()
+    with pytest.raises(ArtifactError, match=f"big.txt:{MAX_RULES + 1}:1: round 1 has more than {MAX_RULES} rules"):
+        load_program(big)
+    assert time.perf_counter() - t0 < 1.0
+    assert len(parse("".join(["random(filter(d <= 1.0, l))\n"] * MAX_RULES)).rounds[0]) == MAX_RULES
+
+
+def test_suggested_commands_quote_paths_with_spaces(runs):
+    """Issue 28, item 4: a printed command with a path holding spaces runs as printed (shlex quoting)."""
+    import shlex
+
+    folder = runs / "my programs"
+    folder.mkdir()
+    (folder / "two rules.txt").write_text("random(filter(d <= 2.5, l))\nrandom(filter(d <= 3.0, l))\n")
+    p = run(["eval", "baseline=prog-retrained", *TINY, f"program={folder / 'two rules.txt'}"], runs, check=False)
+    line = p.stderr.strip().splitlines()[-1]
+    printed = line.split("create it with `", 1)[1].rstrip("`")
+    assert shlex.quote(f"program={folder / 'two rules.txt'}") in printed
+    words = shlex.split(printed)
+    assert words[:2] == ["neurosym", "retrain"]
+    run([*words[1:], "threads=1"], runs)
+    run(["eval", "baseline=prog-retrained", *TINY, f"program={folder / 'two rules.txt'}"], runs)
