@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 
-from .. import __version__, artifacts, paths
+from .. import __version__, paths
 from ..config import RunConfig
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
