@@ -13,7 +13,8 @@ from typing import Any
 
 import torch
 
-from .config import ModelConfig
+from .config import ModelConfig, UserError
+from .errors import cut
 from .utils.cpu import runtime
 from .utils.io import ArtifactError, atomic_write_bytes, read_json, write_csv, write_json, write_text  # noqa: F401
 from .policy.transformer import CommTransformer
@@ -21,10 +22,14 @@ from .policy.transformer import CommTransformer
 CHECKPOINT_FORMAT = "neurosym-policy/1"
 
 
-def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
+def checkpoint_bytes(payload: dict[str, Any]) -> bytes:
     buf = io.BytesIO()
     torch.save(payload, buf)
-    atomic_write_bytes(Path(path), buf.getvalue())
+    return buf.getvalue()
+
+
+def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
+    atomic_write_bytes(Path(path), checkpoint_bytes(payload))
 
 
 def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any]:
@@ -42,17 +47,52 @@ def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any
     return payload
 
 
+def non_finite(obj: Any, where: str = "") -> str | None:
+    """Where the first nan or inf of a payload's float tensors is (``where`` + its keys and indices, as
+    ``state_dict.w``, ``[0].rel``), or None: nested dicts, lists and tuples are searched."""
+    if isinstance(obj, torch.Tensor):
+        return where or "a tensor" if obj.is_floating_point() and not bool(torch.isfinite(obj).all()) else None
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, (list, tuple)) else ()
+    for k, v in items:
+        found = non_finite(v, f"{where}.{k}" if isinstance(k, str) else f"{where}[{k}]")
+        if found:
+            return found.lstrip(".")
+    return None
+
+
 def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
     """A policy checkpoint (weights, architecture, config, resume state); one with a nan or inf weight (a
     diverged training, saved before training refused to save them) is refused: it would evaluate as nan."""
     payload = load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
-    for part in ("state_dict", "comm_state"):
-        weights = payload.get(part)
-        if isinstance(weights, dict) and not all(bool(torch.isfinite(t).all()) for t in weights.values()
-                                                 if isinstance(t, torch.Tensor) and t.is_floating_point()):
-            raise ArtifactError(f"{path} holds non-finite weights (a diverged training); re-run `{made_by}` with "
-                                "overwrite=true and a smaller optim.lr")
+    why = _checkpoint_problem(payload)
+    if why:  # the right format tag, but keys missing or weights of other shapes: never half-loaded
+        raise ArtifactError(f"{path} is not a usable checkpoint: {why}; delete it and re-run `{made_by}`")
+    bad = non_finite({part: payload.get(part) for part in ("state_dict", "comm_state")})
+    if bad:
+        raise ArtifactError(f"{path} holds non-finite weights ({bad}: a diverged training); re-run `{made_by}` "
+                            "with overwrite=true and a smaller optim.lr")
     return payload
+
+
+_CHECKPOINT_KEYS = (("state_dict", dict), ("arch", dict), ("config", dict), ("fit", dict), ("done", bool))
+"""what every reader of a checkpoint takes from it (``policy_payload`` writes them)"""
+
+
+def _checkpoint_problem(payload: dict[str, Any]) -> str | None:
+    """Why a payload of the checkpoint format cannot be used (a key missing or of another type, weights that do
+    not fit the architecture it records), or None. The model is built and loaded strictly to find out."""
+    for key, typ in _CHECKPOINT_KEYS:
+        if not isinstance(payload.get(key), typ):
+            return f"{key!r} is missing or not a {typ.__name__}"
+    fit = payload["fit"]
+    if not (isinstance(fit.get("step"), int) and fit["step"] >= 0 and isinstance(fit.get("history"), list)):
+        return "'fit' has no step count and history"
+    try:
+        policy_from_payload(payload)
+    except (KeyError, TypeError, ValueError, RuntimeError, UserError) as e:
+        lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+        return f"its weights do not fit the architecture it records ({cut(' '.join(lines[1:2] or lines[:1]), 160)})"
+    return None
 
 
 # ------------------------------------------------------------------------------------------- policies

@@ -106,6 +106,11 @@ class BaselineConfig:
         ``env``, the task, for a scheme whose rule needs it when built (none of the paper's)."""
         raise NotImplementedError
 
+    def rules(self, cfg: "RunConfig", comm: Any) -> int:
+        """K of its results (metrics.json's ``rules``): the rules per round it ran under; the config's K unless its
+        provider says otherwise (a hand-written program has its own)."""
+        return cfg.rules
+
     def trains_from_oracle(self, cfg: "RunConfig") -> bool:
         """Its own model starts from the oracle's weights (for budget.retrain_rollouts at optim.retrain_lr)."""
         return False

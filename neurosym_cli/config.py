@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .baselines import BaselineConfig
-from .errors import ConfigError, UserError, check as _check, check_finite, check_name, lies_under  # noqa: F401  (UserError: re-exported for every layer)
+from .errors import ConfigError, UserError, check as _check, check_finite, check_name, cut, lies_under  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import cpu as _cpu
 from .verb_config import ExportConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
@@ -274,6 +274,8 @@ class RunConfig:
         _check(self.exp_dir == MISSING or lies_under(self.exp_dir, self.runs_root),
                f"exp_dir={self.exp_dir} lies outside runs_root={self.runs_root}; every artifact is written under "
                "runs_root: set runs_root=... instead")
+        _check(-2**63 <= self.seed < 2**63, f"seed={cut(self.seed)} is beyond a 64-bit integer, what every random "
+               "generator takes; use a smaller one")
         _check(self.rules > 0, f"rules must be positive, got {self.rules}")
         _check(self.lam >= 0, f"lam must be non-negative, got {self.lam}")
         _check(self.device in ("auto", "cpu", "cuda") or self.device.startswith("cuda:"),

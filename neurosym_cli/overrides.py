@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import os
 import re
 
 from .config import RunConfig, TaskConfig
+from .errors import cut
 from .schemes import SCHEMES
 
 _SCHEMAS = {f.name: type(f.default_factory()) for f in dataclasses.fields(RunConfig)  # type: ignore[misc]
@@ -59,6 +61,35 @@ def _type_error(value: str, typ: str) -> str | None:
     return None
 
 
+_INTERPOLATION = re.compile(r"\$\{([^${}]*)\}")  # the innermost ${...} of a value
+_INT64 = 2**63
+
+
+def _interpolation_problem(value: str, keys: dict[str, str]) -> str | None:
+    """Why an interpolation in an override's value cannot resolve (a key no config has, an unset environment
+    variable without a default), or None; resolvers other than oc.env are left to Hydra."""
+    for m in _INTERPOLATION.finditer(value):
+        body = m.group(1).strip()
+        if body.startswith("oc.env:"):
+            var, sep, _ = body[len("oc.env:"):].partition(",")
+            if not sep and var.strip() not in os.environ:
+                return (f"the environment variable {var.strip()} is not set; set it, or give a default: "
+                        f"${{oc.env:{var.strip()},VALUE}}")
+        elif ":" not in body and body not in keys and not body.startswith(("hydra", ".")):
+            near = difflib.get_close_matches(body, list(keys), n=1, cutoff=0.6)
+            return f"${{{body}}} names no key of the config" + (f"; did you mean ${{{near[0]}}}?" if near else "")
+    return None
+
+
+def _int_problem(value: str) -> str | None:
+    """Why an integer override's value does not fit the 64 bits every consumer (torch, numpy, Hydra) takes."""
+    for part in value.split(","):
+        part = part.strip().replace("_", "")
+        if _INT.fullmatch(part) and not -_INT64 <= int(part) < _INT64:
+            return f"{cut(part, 40)} is beyond a 64-bit integer (-2^63 to 2^63 - 1)"
+    return None
+
+
 def check(args: list[str], task_schemas: list[type] | None = None) -> str | None:
     """A one-line error for the first bad override in ``args`` (flags and Hydra's own keys are skipped), else None.
     ``task_schemas``: the schemas of the tasks the command line runs (their own keys are known)."""
@@ -67,19 +98,29 @@ def check(args: list[str], task_schemas: list[type] | None = None) -> str | None
         if a.startswith("-") or "=" not in a and not a.startswith("~"):
             continue
         key, _, value = a.partition("=")
+        removed = key.startswith("~")
         key = key.lstrip("+~")
         if key.startswith("hydra") or "/" in key or "@" in key:
             continue
+        if removed and key in keys:  # every key is part of the typed config: removing one leaves it missing
+            what = f"choose another one ({key}=...)" if keys[key] == "group" else f"set it instead ({key}=...)"
+            return f"{cut(a)}: {key} cannot be removed, every command reads it; {what}"
+        why = _interpolation_problem(value, keys)
+        if why:
+            return f"{cut(a)}: {why}"
         if not all(ch.isascii() for ch in value) and not value.startswith(("'", '"')):
-            return (f"{a}: Hydra reads non-ASCII characters only in quotes; write it as \"{key}='{value}'\" "
+            return (f"{cut(a)}: Hydra reads non-ASCII characters only in quotes; write it as \"{key}='{cut(value)}'\" "
                     f"(the double quotes are for the shell)")
         if key not in keys:
             near = difflib.get_close_matches(key, list(keys), n=1, cutoff=0.6)
             hint = f"; did you mean {near[0]!r}?" if near else "; `neurosym <command> --cfg job` lists the keys"
-            return f"unknown key {key!r}{hint}"
+            return f"unknown key {cut(repr(key))}{hint}"
         typ = keys[key].replace("Optional[", "").rstrip("]")
         if typ in ("int", "float", "bool"):
             why = _type_error(value, typ)
             if why:
-                return f"{a}: {key} takes {why}, not {value!r}"
+                return f"{cut(a)}: {key} takes {why}, not {cut(repr(value))}"
+            why = _int_problem(value) if typ == "int" else None
+            if why:
+                return f"{cut(a)}: {key} takes a 64-bit integer; {why}"
     return None

@@ -91,3 +91,8 @@ def retrain_command(cfg: RunConfig) -> str:
 def synth_command(cfg: RunConfig) -> str:
     """The command line that synthesizes the program or tree ``cfg``'s baseline runs under."""
     return cfg.baseline.command("synth", cfg)
+
+
+def pipeline_command(cfg: RunConfig) -> str:
+    """The command line that makes (or reuses) every artifact of ``cfg``'s run directory and evaluates again."""
+    return f"neurosym pipeline task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}"

@@ -60,6 +60,7 @@ class FitState:
     optimizer: dict | None = None
     gen_state: torch.Tensor | None = None
     torch_rng: torch.Tensor | None = None
+    mean_return: torch.Tensor | None = None  # rl: (T,) running mean return, the baseline of one-episode buckets
 
 
 class Diverged(UserError):
@@ -69,6 +70,10 @@ class Diverged(UserError):
     def __init__(self, step: int, what: str):
         super().__init__(f"training diverged at step {step}: {what}")
         self.step, self.what = step, what
+
+
+class ResumeMismatch(UserError):
+    """A checkpoint's optimizer or generator state does not fit the model it resumes; the caller names the file."""
 
 
 def _finite_weights(groups: list[dict]) -> bool:
@@ -109,16 +114,23 @@ def fit(
         groups.append({"params": list(gate.parameters()), "scale": spec.comm_lr_scale})
         gate.train()
     opt = torch.optim.Adam([{"params": g["params"]} for g in groups], lr=spec.lr_at(0))
-    if state.optimizer is not None:
-        opt.load_state_dict(state.optimizer)
-    if state.gen_state is not None:
-        gen.set_state(state.gen_state)
-    if state.torch_rng is not None:
-        torch.set_rng_state(state.torch_rng)
+    try:
+        if state.optimizer is not None:
+            opt.load_state_dict(state.optimizer)
+            bad = [k for g in opt.param_groups for p in g["params"] for k, v in opt.state.get(p, {}).items()
+                   if isinstance(v, torch.Tensor) and v.dim() and v.shape != p.shape]
+            if bad:  # Adam loads moments of any shape and fails at its first step
+                raise ValueError(f"the optimizer's {bad[0]} has another shape than its weight")
+        if state.gen_state is not None:
+            gen.set_state(state.gen_state)
+        if state.torch_rng is not None:
+            torch.set_rng_state(state.torch_rng)
+    except (KeyError, TypeError, ValueError, RuntimeError) as e:  # a checkpoint of the right format, edited
+        raise ResumeMismatch(f"its resume state does not fit this model ({str(e).splitlines()[0][:120]})") from None
     policy.train()
     discount = spec.optim.gamma ** torch.arange(spec.horizon, dtype=torch.float32, device=device)  # (T,)
     rng = Rng(gen, device)
-    mean_return = None  # rl: running mean return per step, the baseline of one-episode buckets
+    mean_return = state.mean_return  # rl: running mean return per step, the baseline of one-episode buckets
     while state.step < spec.steps:
         t0 = time.perf_counter()
         batch = min(spec.batch, spec.rollouts - state.step * spec.batch)
@@ -167,5 +179,6 @@ def fit(
             state.optimizer = opt.state_dict()
             state.gen_state = gen.get_state()
             state.torch_rng = torch.get_rng_state()
+            state.mean_return = mean_return  # part of the next step's loss: a resume without it differs
             save(state)
     return state

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 import pytest
 
@@ -545,3 +546,391 @@ def test_an_evaluation_is_of_the_condition_and_baseline_it_names(tmp_path):
     one_line_error(run(["train", *common, "task.noise_std=0.5", "budget.train_rollouts=16"], tmp_path, check=False),
                    "was trained with task.noise_std=0.05")
     run(["eval", *common, "baseline=tf-full", "task.eval_episodes=2"], tmp_path)  # the protocol, not the condition
+
+
+# ------------------------------------------------------------------------------------------ rl reproducible
+def _rl_run(runs: Path) -> tuple[list[list[str]], dict]:
+    """An rl model's history (without the wall-clock column) and its weights (transformer and gate)."""
+    import torch
+
+    out = runs / "random-grid/tiny/seed0/train/rl-c0.1-togo-scratch"
+    rows = [line.split(",") for line in (out / "history.csv").read_text().splitlines()]
+    col = rows[0].index("seconds")
+    ckpt = torch.load(out / "model.pt", weights_only=True)
+    return [r[:col] + r[col + 1:] for r in rows], {**ckpt["state_dict"], **{f"gate.{k}": v for k, v in
+                                                                           ckpt["comm_state"].items()}}
+
+
+def test_rl_is_reproducible_and_a_kill_9_resumes_exactly(tmp_path):
+    """Issue 28, item 6: the same seed and threads give the same rl weights and history, and a run killed with
+    SIGKILL after a checkpoint and run again ends where the uninterrupted run ends (its gate's initial weights are
+    drawn from the seed; its running mean return travels in the checkpoint)."""
+    import torch
+
+    args = ["train", "task=random-grid", "budget=tiny", "threads=1", "baseline=rl", "rl.init=scratch",
+            "budget.train_rollouts=48"]
+    roots = [tmp_path / r for r in ("a", "b", "killed")]
+    for r in roots[:2]:
+        r.mkdir()
+        run(args, r)
+    (a_hist, a_w), (b_hist, b_w) = _rl_run(roots[0]), _rl_run(roots[1])
+    assert a_hist == b_hist and len(a_hist) == 13
+    assert all(torch.equal(a_w[k], b_w[k]) for k in a_w)
+    killed = roots[2]
+    killed.mkdir()
+    env = {**os.environ, "NEUROSYM_RUNS": str(killed)}
+    p = subprocess.Popen([*neurosym_cmd(), *args], cwd=killed, env=env, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL)
+    history = killed / "random-grid/tiny/seed0/train/rl-c0.1-togo-scratch/history.csv"
+    _wait_for(lambda: history.exists() and len(history.read_text().splitlines()) > 3, timeout=120)
+    p.kill()
+    p.wait()
+    again = run(args, killed)
+    assert "resuming" in again.stdout + again.stderr  # it was killed mid-run, not after the end
+    k_hist, k_w = _rl_run(killed)
+    assert k_hist == a_hist
+    assert all(torch.equal(a_w[k], k_w[k]) for k in a_w)
+
+
+# ------------------------------------------------------------------------------------------ issue 28, item 4
+@pytest.fixture(scope="module")
+def trained_root(tmp_path_factory):
+    """A runs root with random-grid's tiny oracle and its synthesized program (made once for this module)."""
+    root = tmp_path_factory.mktemp("trained")
+    run(["train", "task=random-grid", "budget=tiny", "threads=1"], root)
+    run(["synth", "task=random-grid", "budget=tiny", "threads=1"], root)
+    return root
+
+
+@pytest.fixture
+def runs(trained_root, tmp_path):
+    """A private copy of ``trained_root`` (a test may break its artifacts)."""
+    import shutil
+
+    shutil.copytree(trained_root, tmp_path / "runs", symlinks=True)
+    return tmp_path / "runs"
+
+
+EXP = "random-grid/tiny/seed0"
+TINY = ["task=random-grid", "budget=tiny", "threads=1"]
+
+
+def test_a_hand_written_programs_metrics_record_its_own_k(runs):
+    """Issue 28, item 2: K of a program given as program=FILE is the file's (3 rules), not the config's rules=2."""
+    import json
+
+    prog = runs / "three.txt"
+    prog.write_text("random(filter(d <= 2.0, l))\nrandom(filter(d <= 3.0, l))\nrandom(filter(gy >= -1.0, l))\n")
+    run(["eval", "baseline=prog", *TINY, f"program={prog}"], runs)
+    (out,) = (runs / EXP / "eval").glob("prog-file-three-*/metrics.json")
+    assert json.loads(out.read_text())["rules"] == 3
+    run(["eval", "baseline=prog", *TINY], runs)  # the synthesized program's is its search's K
+    assert json.loads((runs / EXP / "eval/prog-k2-lam0.5-v1/metrics.json").read_text())["rules"] == 2
+
+
+def test_no_nan_from_a_finite_model_or_a_nan_dataset(runs):
+    """Issue 28, item 1: a dataset D holding a nan is never searched on (collected again), an oracle whose
+    rollouts overflow (weights finite, 1e30 times too large) is refused by synth and eval in one line, and no
+    metrics.json or program is written from it."""
+    import torch
+
+    data = runs / EXP / "synth/dataset-r4-s10.pt"
+    payload = torch.load(data, weights_only=True)
+    payload["buckets"][0]["rel"].view(-1)[0] = float("nan")
+    torch.save(payload, data)
+    p = run(["synth", *TINY, "overwrite=true"], runs)
+    assert "holds non-finite values (buckets[0].rel); collecting it again" in p.stdout + p.stderr
+    assert all(torch.isfinite(b["rel"]).all() for b in torch.load(data, weights_only=True)["buckets"])
+    ckpt = runs / EXP / "train/oracle/model.pt"
+    payload = torch.load(ckpt, weights_only=True)
+    for w in payload["state_dict"].values():
+        w.mul_(1e30)
+    torch.save(payload, ckpt)
+    data.unlink()
+    one_line_error(run(["synth", *TINY, "overwrite=true"], runs, check=False), "rollouts reached non-finite values")
+    assert not data.exists()
+    one_line_error(run(["eval", "baseline=tf-full", *TINY], runs, check=False), "gave a non-finite cost")
+    assert not (runs / EXP / "eval/tf-full").exists()
+
+
+def _mount_tmpfs(where: Path, size: str) -> bool:
+    """A small tmpfs at ``where`` (root only): a disk that really fills up."""
+    where.mkdir(parents=True, exist_ok=True)
+    return subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(where)],
+                          capture_output=True).returncode == 0
+
+
+def _fill(disk: Path, leave_kib: int) -> None:
+    """Fill ``disk`` up to ``leave_kib`` KiB of free space."""
+    st = os.statvfs(disk)
+    free = st.f_bavail * st.f_frsize // 1024
+    with open(disk / "filler", "ab") as f:
+        f.write(b"\0" * max(0, free - leave_kib) * 1024)
+
+
+def test_a_write_that_fails_leaves_the_old_file_and_no_temp_file(tmp_path, monkeypatch):
+    """The artifact IO layer under a full disk (simulated: every write of a temp file fails with ENOSPC): one
+    ArtifactError naming the file, the previous version intact, no temp file left; a pair written together
+    (metrics.json and metrics.csv) changes both or neither."""
+    import errno
+
+    from neurosym_cli.utils import io
+
+    (tmp_path / "a.json").write_text('{"old": 1}')
+    (tmp_path / "a.csv").write_text("old\n")
+    real = Path.write_bytes
+
+    def full(self, data):
+        if self.name.endswith(".tmp.csv"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, data)
+
+    monkeypatch.setattr(Path, "write_bytes", full)
+    with pytest.raises(ArtifactError, match="no space left on the disk of .*a.csv"):
+        io.write_together({tmp_path / "a.json": b'{"new": 1}', tmp_path / "a.csv": b"new\n"})
+    assert (tmp_path / "a.json").read_text() == '{"old": 1}' and (tmp_path / "a.csv").read_text() == "old\n"
+    with pytest.raises(ArtifactError, match="no space left"):
+        io.write_csv(tmp_path / "a.csv", [{"x": 1}])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "a.json"]  # no temp file left
+
+
+def test_a_disk_that_fills_up_is_one_line_and_nothing_half_written(runs, tmp_path):
+    """Issue 28, item 4, on a real 4 MB tmpfs (root only): train and eval stop with one line; nothing that reads
+    as complete is half-written; after space is freed the same command finishes."""
+    import json
+
+    import torch
+
+    disk = tmp_path / "disk"
+    if not _mount_tmpfs(disk, "4m"):
+        pytest.skip("needs root to mount a tmpfs (test_a_write_that_fails_... simulates it)")
+    try:
+        import shutil
+
+        shutil.copytree(runs / EXP / "synth", disk / EXP / "synth")  # no model yet: train must write one
+        _fill(disk, 60)  # Hydra's logs fit, the 59 KB checkpoint and its history do not
+        one_line_error(run(["train", *TINY], disk, check=False), "no space left on the disk")
+        assert not list(disk.rglob("model.pt")) and not list(disk.rglob("*.tmp*"))
+        (disk / "filler").unlink()
+        run(["train", *TINY], disk)
+        assert torch.load(disk / EXP / "train/oracle/model.pt", weights_only=True)["done"]
+        for leave in (40, 20, 8):  # the disk fills at another write each time (logs, metrics, figures)
+            _fill(disk, leave)
+            p = run(["eval", "baseline=tf-full", *TINY], disk, check=False)
+            assert "Traceback" not in p.stderr, p.stderr
+            if p.returncode:
+                assert "no space left on the disk" in p.stderr.strip().splitlines()[-1], p.stderr
+            (disk / "filler").unlink()
+            for m in disk.rglob("metrics.json"):  # whatever is there reads as a whole evaluation
+                assert json.loads(m.read_text())["summary"]["cost"]["mean"] > 0
+            assert not list(disk.rglob("*.tmp*"))
+    finally:
+        subprocess.run(["umount", "-l", str(disk)])
+
+
+def _read_only(directory: Path) -> Callable[[], None] | None:
+    """Make ``directory`` read-only (a read-only bind mount for root, whom permissions do not stop; else the mode
+    bits); returns what undoes it, or None when it cannot be done here."""
+    if os.geteuid() == 0:
+        ok = subprocess.run(["mount", "--bind", str(directory), str(directory)], capture_output=True).returncode == 0
+        ok = ok and subprocess.run(["mount", "-o", "remount,ro,bind", str(directory)],
+                                   capture_output=True).returncode == 0
+        return (lambda: subprocess.run(["umount", "-l", str(directory)])) if ok else None
+    modes = {p: p.stat().st_mode for p in [directory, *directory.rglob("*")] if p.is_dir()}
+    for p in modes:
+        p.chmod(0o555)
+    return lambda: [p.chmod(m) for p, m in modes.items()]
+
+
+def test_a_read_only_seed_directory(runs, tmp_path):
+    """Issue 28, item 4: an archived (read-only) seed directory: train and eval stop with one line (whether
+    Hydra's logs or our artifacts meet it first), show-program reads it (logging elsewhere), nothing changes."""
+    seed = runs / EXP
+    before = sorted((p.relative_to(seed), p.stat().st_size) for p in seed.rglob("*") if p.is_file())
+    undo = _read_only(seed)
+    if undo is None:
+        pytest.skip("cannot make a directory read-only here")
+    try:
+        logs = f"hydra.run.dir={tmp_path / 'logs'}"
+        for args in (["train", "overwrite=true"], ["train", "budget.train_rollouts=12"], ["eval", "baseline=tf-full"],
+                     ["eval", "baseline=tf-full", logs], ["train", "overwrite=true", logs]):
+            one_line_error(run([*args, *TINY], runs, check=False), "read-only")
+        assert "random(filter(" in run(["show-program", *TINY, logs], runs).stdout
+    finally:
+        undo()
+    assert sorted((p.relative_to(seed), p.stat().st_size) for p in seed.rglob("*") if p.is_file()) == before
+
+
+def test_a_team_too_large_for_memory_is_one_line(tmp_path):
+    """Issue 28, item 4: the allocator's error (here under a 4 GB address-space limit) is one line naming the
+    size asked for and what to make smaller."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
+
+    p = run(["train", *TINY, "task.agents_per_group=1500"], tmp_path, check=False, preexec_fn=limit)
+    one_line_error(p, "out of memory (it asked for")
+    assert "a smaller team" in p.stderr
+    from neurosym_cli.errors import resource_problem
+
+    assert resource_problem(MemoryError()).startswith("out of memory")
+    assert resource_problem(ValueError("x")) is None  # a bug keeps its traceback
+
+
+_MUTATIONS = {
+    "a weight missing": lambda p: p["state_dict"].pop(next(iter(p["state_dict"]))),
+    "a weight of another shape": lambda p: p["state_dict"].update({next(iter(p["state_dict"])): _zeros(3, 3)}),
+    "no architecture": lambda p: p.pop("arch"),
+    "an architecture of another type": lambda p: p["arch"].update(obs_dim="x"),
+    "an unknown architecture key": lambda p: p["arch"].update(hidden=-5),
+    "weights not a dict": lambda p: p.update(state_dict=[1]),
+    "no resume state": lambda p: p.pop("fit"),
+    "no done flag": lambda p: p.pop("done"),
+}
+
+
+def _zeros(*shape):
+    import torch
+
+    return torch.zeros(*shape)
+
+
+@pytest.mark.parametrize("what", list(_MUTATIONS))
+def test_a_checkpoint_with_missing_keys_or_other_shapes_is_refused(trained_root, tmp_path, what):
+    """Issue 28, item 4: a checkpoint of the right format tag whose keys are missing or whose weights have other
+    shapes is one line at load time (never half-loaded)."""
+    import torch
+
+    from neurosym_cli.artifacts import load_checkpoint
+
+    payload = torch.load(trained_root / EXP / "train/oracle/model.pt", weights_only=True)
+    _MUTATIONS[what](payload)
+    torch.save(payload, tmp_path / "model.pt")
+    with pytest.raises(ArtifactError, match="is not a usable checkpoint.*re-run `neurosym train"):
+        load_checkpoint(tmp_path / "model.pt", "neurosym train")
+
+
+def test_a_checkpoint_of_other_shapes_through_the_commands(runs):
+    """The same through eval, synth and a resume; and a resume state (Adam's moments) of other shapes."""
+    import torch
+
+    ckpt = runs / EXP / "train/oracle/model.pt"
+    good = torch.load(ckpt, weights_only=True)
+    payload = torch.load(ckpt, weights_only=True)
+    _MUTATIONS["a weight of another shape"](payload)
+    torch.save(payload, ckpt)
+    for verb in (["eval", "baseline=tf-full"], ["synth", "overwrite=true"], ["train", "budget.train_rollouts=12"]):
+        one_line_error(run([*verb, *TINY], runs, check=False), "is not a usable checkpoint")
+    good["fit"]["optimizer"]["state"][0]["exp_avg"] = torch.zeros(2)
+    torch.save(good, ckpt)
+    one_line_error(run(["train", *TINY, "budget.train_rollouts=12"], runs, check=False),
+                   "its resume state does not fit this model")
+
+
+@pytest.mark.parametrize("content", ["[1, 2]", '{"rules": "x", "lam": [], "synth": 3}', "not json", '{"a": "b"}'])
+def test_corrupt_json_artifacts_name_the_command_that_writes_them_again(runs, content):
+    """Issue 28, item 4: metrics.json, selected.json, pipeline_timings.json and summary.json corrupt or of another
+    shape or type: one line that names the command writing them again."""
+    import dataclasses
+
+    import neurosym_cli.api as ns
+    from neurosym_cli.stages.synth import read_summary
+
+    exp = runs / EXP
+    (exp / "select").mkdir()
+    (exp / "select/selected.json").write_text(content)
+    one_line_error(run(["eval", "baseline=prog", "selected=true", *TINY], runs, check=False),
+                   "delete it and run `neurosym select task=random-grid budget=tiny seed=0`")
+    (exp / "pipeline_timings.json").write_text(content)
+    one_line_error(run(["pipeline", "baselines=[tf-full]", *TINY], runs, check=False),
+                   "delete it and run `neurosym pipeline task=random-grid budget=tiny seed=0`")
+    (exp / "eval/tf-full").mkdir(parents=True)
+    (exp / "eval/tf-full/metrics.json").write_text(content)  # read by the table every eval prints
+    one_line_error(run(["eval", "baseline=prog", *TINY], runs, check=False),
+                   "delete it and run `neurosym pipeline task=random-grid budget=tiny seed=0`")
+    (exp / "synth/k2-lam0.5-v1/summary.json").write_text(content)  # select reads every round's time
+    cfg = dataclasses.replace(ns.compose("synth", task="random-grid", budget="tiny"), runs_root=str(runs),
+                              exp_dir=str(exp))
+    with pytest.raises(ArtifactError, match=r"delete it and run `neurosym synth .* overwrite=true`"):
+        read_summary(cfg)
+
+
+@pytest.mark.parametrize("arg,needle", [
+    ("seed=${oops}", "${oops} names no key of the config"),
+    ("rules=${task.rulez}", "did you mean ${task.rules}?"),
+    ("seed=${oc.env:NEUROSYM_SURELY_UNSET}", "NEUROSYM_SURELY_UNSET is not set; set it, or give a default"),
+    ("~task", "task cannot be removed"),
+    ("~budget", "budget cannot be removed"),
+    ("~seed", "seed cannot be removed"),
+    ("seed=99999999999999999999", "beyond a 64-bit integer"),
+    ("seed=-9223372036854775809", "beyond a 64-bit integer"),
+    ("task.v_max=1e308", "task.v_max must lie in"),
+    ("hydra.run.dir=${oops}", "Interpolation key 'oops' not found"),  # past our check: Hydra's own, one line
+])
+def test_interpolations_removals_and_huge_numbers_in_overrides_are_one_line(tmp_path, arg, needle):
+    one_line_error(run(["train", *TINY, arg], tmp_path, check=False), needle)
+    assert not list(tmp_path.rglob("model.pt"))
+
+
+def test_working_interpolations_still_work(tmp_path):
+    from neurosym_cli.overrides import check
+
+    os.environ.setdefault("NEUROSYM_RUNS", str(tmp_path))
+    assert check(["rules=${task.rules}", "runs_root=${oc.env:NEUROSYM_RUNS}", "seed=${oc.env:NOPE_NOPE,3}",
+                  "seed=9223372036854775807"]) is None
+
+
+@pytest.mark.parametrize("arg", ["lam=" + "9" * 20_000 + "x", "task.name=" + "x" * 20_000, "x" * 20_000 + "=1",
+                                 "runs_root=\u00e9" + "x" * 20_000])
+def test_long_values_are_cut_in_messages(tmp_path, arg):
+    """Issue 28, item 4: a 20,000-character value is quoted in part, with its length; a name that long is refused
+    (names are at most 100 characters)."""
+    p = run(["train", *TINY, arg], tmp_path, check=False)
+    assert p.returncode != 0 and "Traceback" not in p.stderr
+    assert len(p.stderr) < 1_000 and "characters)" in p.stderr, p.stderr[:2000]
+
+
+def test_the_error_edge_cuts_every_long_word():
+    from neurosym_cli.errors import cut, cut_words
+
+    msg = cut_words("cannot read " + "/a" * 10_000 + ": gone")
+    assert len(msg) < 300 and msg.endswith("... (20,001 characters) gone")  # the word with its colon
+    assert cut("short") == "short"
+
+
+def test_a_byte_order_mark_is_accepted(tmp_path):
+    text = "random(filter(d <= 2.0, l))\nrandom(filter(d <= 3.0, l))\n"
+    (tmp_path / "bom.txt").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load_program(tmp_path / "bom.txt") == parse(text)
+
+
+def test_a_program_of_20000_rules_is_refused_at_once(tmp_path):
+    """Issue 28, item 4: at most 64 rules a round (dsl/parser.MAX_RULES), refused at the 65th line in well under a
+    second, where eval would run the whole file for minutes."""
+    from neurosym_cli.dsl.parser import MAX_RULES
+
+    big = tmp_path / "big.txt"
+    big.write_text("".join(f"random(filter(d <= {k / 1000:.3f}, l))\n" for k in range(20_000)))
+    t0 = time.perf_counter()
+    with pytest.raises(ArtifactError, match=f"big.txt:{MAX_RULES + 1}:1: round 1 has more than {MAX_RULES} rules"):
+        load_program(big)
+    assert time.perf_counter() - t0 < 1.0
+    assert len(parse("".join(["random(filter(d <= 1.0, l))\n"] * MAX_RULES)).rounds[0]) == MAX_RULES
+
+
+def test_suggested_commands_quote_paths_with_spaces(runs):
+    """Issue 28, item 4: a printed command with a path holding spaces runs as printed (shlex quoting)."""
+    import shlex
+
+    folder = runs / "my programs"
+    folder.mkdir()
+    (folder / "two rules.txt").write_text("random(filter(d <= 2.5, l))\nrandom(filter(d <= 3.0, l))\n")
+    p = run(["eval", "baseline=prog-retrained", *TINY, f"program={folder / 'two rules.txt'}"], runs, check=False)
+    line = p.stderr.strip().splitlines()[-1]
+    printed = line.split("create it with `", 1)[1].rstrip("`")
+    assert shlex.quote(f"program={folder / 'two rules.txt'}") in printed
+    words = shlex.split(printed)
+    assert words[:2] == ["neurosym", "retrain"]
+    run([*words[1:], "threads=1"], runs)
+    run(["eval", "baseline=prog-retrained", *TINY, f"program={folder / 'two rules.txt'}"], runs)

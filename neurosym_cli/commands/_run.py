@@ -12,12 +12,19 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from ..config import RunConfig, UserError
+from ..errors import cut_words, resource_problem
 from ..stages import RunInfo
 
 
 def _error(name: str, msg: str, code: int = 1) -> None:
-    print(f"neurosym {name.replace('_', '-')}: error: {msg}", file=sys.stderr)
+    print(f"neurosym {name.replace('_', '-')}: error: {cut_words(msg)}", file=sys.stderr)
     raise SystemExit(code)
+
+
+def _problem(e: Exception) -> str | None:
+    """The one line of a failure that is the input's or the machine's (bad input, a full or read-only disk, memory
+    exhausted), None for a bug (its traceback is kept)."""
+    return str(e) if isinstance(e, UserError) else resource_problem(e)
 
 
 def _plain_logs_off_terminal() -> None:
@@ -125,14 +132,17 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
 
             torch.set_num_threads(typed.threads)
         result = fn(typed, info)
-    except UserError as e:
+    except Exception as e:
+        msg = _problem(e)
+        if msg is None:
+            raise
         if not sweep:
-            _error(name, str(e))
+            _error(name, msg)
         from ..utils.console import say
         from ..utils.io import write_json
 
-        say(f"[red]neurosym {name.replace('_', '-')}: error:[/] {e} (this job only; the sweep goes on)")
-        write_json(record, {"ok": False, **stamp, "error": str(e)})
+        say(f"[red]neurosym {name.replace('_', '-')}: error:[/] {cut_words(msg)} (this job only; the sweep goes on)")
+        write_json(record, {"ok": False, **stamp, "error": msg})
         return None
     except KeyboardInterrupt:
         _error(name, "interrupted; artifacts written so far are intact, re-run the same command to resume", 130)

@@ -7,13 +7,15 @@ so `--help`, `--cfg` and completion stay fast.
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 
 import hydra
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from ..config import RunConfig
-from ..errors import name_problem
+from ..errors import cut_words, name_problem, resource_problem
 from ..schemes import SCHEMES, default_baselines
 from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
@@ -57,7 +59,42 @@ def _make(name: str):
         module = importlib.import_module(f"neurosym_cli.commands.{name}")
         return run_command(name, cfg, module.run)
 
-    return app
+    return _one_line(name, app)
+
+
+def hydra_problem(e: Exception) -> str | None:
+    """The one line of a failure before (or around) a command's own wrapper: Hydra's composition, its log
+    directory (a full or read-only disk), an interpolation that does not resolve; None for a bug."""
+    from hydra.errors import HydraException
+    from omegaconf.errors import OmegaConfBaseException
+
+    if isinstance(e, (HydraException, OmegaConfBaseException)):
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        return f"{first}; an interpolation reads a key of the config (${{seed}}) or a set variable " \
+               "(${oc.env:VAR,default})" if "nterpolation" in type(e).__name__ + first else first
+    return resource_problem(e)
+
+
+def _one_line(name: str, app):
+    """The app with Hydra's own failures as one line and exit 1, as run_command does for the command's: Hydra
+    raises them (HYDRA_FULL_ERROR) instead of printing a cut traceback; a user who set HYDRA_FULL_ERROR gets them
+    whole, as Hydra documents."""
+    def run() -> object:
+        if os.environ.get("HYDRA_FULL_ERROR"):
+            return app()
+        os.environ["HYDRA_FULL_ERROR"] = "1"
+        try:
+            return app()
+        except Exception as e:
+            msg = hydra_problem(e)
+            if msg is None:
+                raise
+            print(f"neurosym {name.replace('_', '-')}: error: {cut_words(msg)}", file=sys.stderr)
+            raise SystemExit(1) from None
+        finally:
+            os.environ.pop("HYDRA_FULL_ERROR", None)
+
+    return run
 
 
 APPS = {module: _make(module) for module, _ in COMMANDS.values()}

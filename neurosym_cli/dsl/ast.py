@@ -82,6 +82,11 @@ class Program:
     def n_rounds(self) -> int:
         return len(self.rounds)
 
+    @property
+    def max_rules(self) -> int:
+        """K: the most rules of any round (a bound on every agent's in-degree)."""
+        return max((len(r) for r in self.rounds), default=0)
+
     def features(self) -> set[str]:
         """Every feature name the program reads."""
         out: set[str] = set()

@@ -33,6 +33,9 @@ _SPACE = re.compile(r"\s*")
 
 MAX_LINE = 10_000
 """characters in one line of program text: a rule of the search is under 200; longer text is refused, not parsed"""
+MAX_RULES = 64
+"""rules in one round: each picks at most one other agent, so K past the largest team (40 agents) adds nothing; the
+search writes K <= 5. A longer file is refused at its first rule over, before eval would run it for minutes"""
 MAX_DEPTH = 64
 """nesting of a filter's and / or / parentheses: the search writes depth 2; deeper trees are refused before they
 reach the recursive printer and evaluator"""
@@ -212,6 +215,7 @@ def parse(text: str, source: str = "<program>") -> Program:
     """Parse program text; raises ProgramSyntaxError with line and column."""
     rounds: list[list[Rule]] = []
     headed = None
+    text = text.removeprefix("\ufeff")  # a byte order mark, as some editors save UTF-8: not part of the program
     for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0]
         if not line.strip():
@@ -235,6 +239,9 @@ def parse(text: str, source: str = "<program>") -> Program:
         if headed is None:
             headed = False
             rounds.append([])
+        if len(rounds[-1]) == MAX_RULES:
+            raise ProgramSyntaxError(f"round {len(rounds)} has more than {MAX_RULES} rules (at most {MAX_RULES}: "
+                                     "each rule picks one other agent)", lineno, toks[0].col, source)
         rounds[-1].append(_LineParser(toks, lineno, source).rule())
     if not rounds or any(not r for r in rounds):
         raise ProgramSyntaxError("a program needs at least one rule in every round", max(1, len(text.splitlines())), 1,

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -127,7 +128,7 @@ class Program(Searched):
 
     def command(self, verb: str, cfg: "RunConfig") -> str:
         if verb == "retrain" and cfg.program:
-            return self._line("retrain", cfg, self.name, f" program={cfg.program}")
+            return self._line("retrain", cfg, self.name, " " + shlex.quote(f"program={cfg.program}"))  # spaces
         return super().command(verb, cfg)
 
     def provider(self, cfg: "RunConfig", env: Any = None):
@@ -141,6 +142,9 @@ class Program(Searched):
         fmap = feature_map(cfg, env)
         check_program(program, cfg, str(path), fmap)
         return ProgramComm(program, fmap)
+
+    def rules(self, cfg: "RunConfig", comm: Any) -> int:
+        return comm.program.max_rules  # the file's K (program= is any file; a search may simplify rules away)
 
     def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
         from ..dsl.printer import to_text

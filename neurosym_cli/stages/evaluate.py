@@ -3,14 +3,16 @@
 
 from __future__ import annotations
 
+import math
 import time
 
-from .. import __version__, artifacts, paths
+from .. import __version__, paths
 from ..config import RunConfig
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
+from ..utils.io import ArtifactError, csv_bytes, json_bytes, write_together
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
@@ -27,20 +29,26 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
     t0 = time.perf_counter()
     rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
     seconds = time.perf_counter() - t0
+    bad = next((f"{k} of seed {r['seed']}" for r in rows for k, v in r.items()
+                if isinstance(v, float) and not math.isfinite(v)), None)
+    if bad:  # finite weights whose rollouts overflow: a nan is never a result, nor written over one
+        raise ArtifactError(f"evaluating {label or paths.baseline_label(cfg)} gave a non-finite {bad}; nothing "
+                            f"written: the model's rollouts diverge, `{paths.train_command(cfg)} overwrite=true` "
+                            "trains it again (a smaller optim.lr, or smaller task scales: task.dt, task.v_max)")
     summary = summarize(rows)
     out = paths.eval_dir(cfg) if label is None else paths.eval_dir(cfg).parent / label
     label = label or paths.baseline_label(cfg)
     with run_lock(out):
-        _write(cfg, info, out, label, rows, summary, seconds)
+        _write(cfg, info, out, label, rows, summary, seconds, cfg.baseline.rules(cfg, comm))
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
     return summary
 
 
-def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float) -> None:
-    artifacts.write_csv(out / "metrics.csv", rows)
-    artifacts.write_json(out / "metrics.json", {
-        "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": cfg.rules,
+def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float,
+           rules: int) -> None:
+    write_together({out / "metrics.csv": csv_bytes(rows), out / "metrics.json": json_bytes({
+        "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
         "runtime": runtime(), "config": cfg.record(),
-    })
+    })})  # both or neither: a full disk never pairs a new table with an old record

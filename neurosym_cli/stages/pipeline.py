@@ -54,7 +54,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     results = {}
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = Path(cfg.exp_dir) / "pipeline_timings.json"
-    timings = read_json(timing_file) if timing_file.exists() else {}
+    timings = read_json(timing_file, paths.pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
+        isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
     for k, stage in enumerate(stages, start=1):
         log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,

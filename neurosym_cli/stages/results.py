@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .. import schemes
+from .. import paths, schemes
 from ..config import RunConfig
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
@@ -21,13 +21,17 @@ Rows = list[tuple[str, dict]]
 """(label, summary) per evaluated baseline; a summary maps each metric to its mean, std, ..."""
 
 
-def _metrics(path: Path) -> dict:
-    """One metrics.json, checked for the fields the tables read."""
-    m = read_json(path)
-    if not (isinstance(m, dict) and isinstance(m.get("label"), str) and isinstance(m.get("baseline"), str)
-            and isinstance(m.get("summary"), dict) and all(isinstance(m["summary"].get(k), dict) for k in METRICS)):
-        raise ArtifactError(f"{path} is not an evaluation written by `neurosym eval`; delete it and evaluate again")
-    return m
+def _evaluation(m: object) -> bool:
+    """Whether a record is a metrics.json of `neurosym eval`: the fields the tables read."""
+    return (isinstance(m, dict) and isinstance(m.get("label"), str) and isinstance(m.get("baseline"), str)
+            and isinstance(m.get("summary"), dict) and all(
+                isinstance(m["summary"].get(k), dict) and isinstance(m["summary"][k].get("mean"), (int, float))
+                for k in METRICS))
+
+
+def _metrics(path: Path, remake: str) -> dict:
+    """One metrics.json, checked for the fields the tables read; ``remake``: the command that writes it again."""
+    return read_json(path, remake, _evaluation)
 
 
 def _eval_interval(m: dict) -> dict:
@@ -40,10 +44,10 @@ def _eval_interval(m: dict) -> dict:
     return out
 
 
-def collect(exp_dir: Path) -> Rows:
+def collect(exp_dir: Path, remake: str = "neurosym pipeline") -> Rows:
     """Every baseline evaluated in an experiment directory, in the paper's order (summaries over its evaluation
-    seeds: mean, std, ci95 = the 95 % t half-width)."""
-    found = [_metrics(f) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
+    seeds: mean, std, ci95 = the 95 % t half-width); ``remake``: the command that evaluates them again."""
+    found = [_metrics(f, remake) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
     found.sort(key=lambda m: (schemes.rank(m["baseline"]), m["label"]))
     return [(m["label"], _eval_interval(m)) for m in found]
 
@@ -111,13 +115,14 @@ def write_figure(cfg: RunConfig) -> Path:
     its models beside it, curves.png)."""
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
                  "training curves", Path(cfg.exp_dir) / "eval" / "curves.png")
-    return figure2(collect(Path(cfg.exp_dir)), title(cfg).replace(": ", ":\n"),
+    return figure2(collect(Path(cfg.exp_dir), paths.pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
                    Path(cfg.exp_dir) / "eval" / "figure2.png", err="ci95")
 
 
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
-    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS, err="ci95"))
+    rows = collect(Path(cfg.exp_dir), paths.pipeline_command(cfg))
+    console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95"))
     if cfg.plots:
         png = write_figure(cfg)
         console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")

@@ -132,14 +132,14 @@ def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
 
 def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """One grid point: its program (searched or reused), then its validation rows."""
-    from .synth import synthesize
+    from .synth import read_summary, synthesize
 
     cfg, info = quiet_job(cfg, info)
     terms = synthesize(cfg, info)
-    summary = read_json(paths.synth_dir(cfg) / "summary.json")
+    summary = read_summary(cfg)
     return {"name": point_name(cfg), "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features,
             "objective": terms.get("objective"), "l1": terms.get("l1"), "degree_term": terms.get("degree"),
-            "search_seconds": sum(float(r.get("seconds", 0.0)) for r in summary.get("rounds", [])),
+            "search_seconds": sum(float(r["seconds"]) for r in summary["rounds"]),
             **_val_columns(validate(dataclasses.replace(cfg, cmd="eval")))}
 
 
@@ -234,8 +234,8 @@ def apply_selected(cfg: RunConfig) -> RunConfig:
     path = selected_file(cfg)
     if not path.exists():
         raise UserError(f"selected=true, but no selection at {path}; make it with `{select_command(cfg)}`")
+    rec = read_json(path, select_command(cfg), {"rules": int, "lam": (int, float), "features": str, "synth": dict})
     try:
-        rec = read_json(path)
         synth = dataclasses.replace(cfg.synth, **rec["synth"])
         return dataclasses.replace(cfg, rules=int(rec["rules"]), lam=float(rec["lam"]), features=str(rec["features"]),
                                    synth=synth, selected=False)

@@ -54,6 +54,21 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
         return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device, out)
 
 
+def _program_summary(rec: object) -> bool:
+    """Whether a record is a program search's summary.json: every round with its objective terms and time."""
+    rounds = rec.get("rounds") if isinstance(rec, dict) else None
+    return isinstance(rounds, list) and bool(rounds) and all(
+        isinstance(r, dict) and all(isinstance(r.get(k), (int, float)) and not isinstance(r.get(k), bool)
+                                    for k in ("objective", "l1", "degree", "seconds")) for r in rounds)
+
+
+def read_summary(cfg: RunConfig) -> dict:
+    """summary.json of ``cfg``'s program search, of the shape ``search_program`` writes; else one line naming the
+    command that searches it again."""
+    return read_json(paths.synth_dir(cfg) / "summary.json", f"{paths.synth_command(cfg)} overwrite=true",
+                     _program_summary)
+
+
 def _terms(summary: Path) -> dict:
     """The objective terms a finished search recorded (summed over rounds), or nothing when unreadable."""
     try:
@@ -71,7 +86,8 @@ def collect_dataset(cfg: RunConfig):
     policy = artifacts.policy_from_payload(payload).to(device).eval()
     env = make_task(cfg.task, cfg.horizon)
     data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
-                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device)
+                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device,
+                           paths.train_command(cfg, oracle=True))
     return policy, env, data, device
 
 

@@ -4,6 +4,7 @@ section 3.5). Both use the one training loop of ``training.fit``."""
 
 from __future__ import annotations
 
+import dataclasses
 import platform
 import time
 from typing import Callable
@@ -12,11 +13,12 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig
+from ..utils.io import ArtifactError, csv_bytes, write_together
 from ..schemes import with_run
 from ..tasks import make_task, probe
 from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module, with_link_failure
-from ..training import Diverged, FitSpec, FitState, fit
+from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
@@ -68,6 +70,22 @@ def _kept(ckpt) -> str:
     return f"the last finite checkpoint (step {step}{'' if done else ', not marked trained'}) is kept at {ckpt}"
 
 
+def _manifest(cfg: RunConfig, info: RunInfo, out, verb: str, spec: FitSpec, state: FitState, seconds: float,
+              rollouts: int, device) -> tuple[list[dict], float]:
+    """manifest.json of a finished training; returns (the last steps' history, their mean loss)."""
+    last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
+    final = sum(h["loss"] for h in last) / len(last)
+    artifacts.write_json(out / "manifest.json", {
+        "command": verb, "version": __version__, "checkpoint": str(out / "model.pt"), "steps": state.step,
+        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
+        "final_loss_steps": len(last),
+        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
+        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
+        "hydra_dir": info.log_dir, "runtime": runtime(), "config": cfg.record(),
+    })
+    return last, final
+
+
 def train(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym train`: the oracle (tf-full, also the weights of hard-attn and the program baselines) with full soft
     attention, or a baseline with its own model (dist, no-comm, rl, ...) trained under its own mask; rl (paper
@@ -80,6 +98,7 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_task(cfg.task, cfg.horizon)
     probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
+    seed_everything(cfg.seed)  # a provider's own parameters (rl's gate) are drawn now: from the seed, too
     comm = with_link_failure(maker.provider(cfg, env), cfg.task.link_failure)
     if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
         payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
@@ -96,6 +115,7 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
         raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
                           f"not {cfg.baseline.name}")
     env = make_task(cfg.task, cfg.horizon)
+    seed_everything(cfg.seed)  # as in train: whatever the provider draws comes from the seed
     comm = baseline_comm(cfg, env)
     payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
@@ -132,9 +152,16 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
                               "overwrite=true retrains it under this one")
         policy = artifacts.policy_from_payload(payload)
         load_gate(comm, payload, ckpt, paths.train_command(cfg))
-        state = FitState(**payload["fit"])
+        try:
+            state = FitState(**payload["fit"])
+        except TypeError:
+            raise ArtifactError(f"{ckpt} has a resume state of another shape; `{paths.train_command(cfg)} "
+                                "overwrite=true` trains from the start") from None
         if state.step >= spec.steps:
-            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt, state.step)
+            log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt,
+                     state.step)
+            if not (out / "manifest.json").exists():  # the run ended before its manifest (a full disk): made now
+                _manifest(cfg, info, out, verb, spec, state, 0.0, 0, device)
             return {"checkpoint": str(ckpt), "steps": state.step}
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
@@ -146,15 +173,13 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         gate.to(device)
 
     def save(st: FitState) -> None:
-        fit_dict = {"step": st.step, "history": st.history, "optimizer": st.optimizer,
-                    "gen_state": st.gen_state, "torch_rng": st.torch_rng}
+        fit_dict = dataclasses.asdict(st)  # every field a resume needs (training.FitState)
         payload = artifacts.policy_payload(policy, cfg.model, cfg.record(), fit_dict, done=st.step >= spec.steps)
         if made_under:
             payload["made_under"] = made_under
         if gate is not None:
             payload["comm_state"] = gate.state_dict()
-        artifacts.save_checkpoint(ckpt, payload)
-        artifacts.write_csv(out / "history.csv", st.history)
+        write_together({ckpt: artifacts.checkpoint_bytes(payload), out / "history.csv": csv_bytes(st.history)})
 
     label = f"{verb} {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
@@ -167,21 +192,15 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
         try:
             state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
                         save, state)
+        except ResumeMismatch as e:
+            raise ArtifactError(f"{ckpt}: {e}; `{paths.train_command(cfg)} overwrite=true` trains from the "
+                                "start") from None
         except Diverged as e:
             raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "
                               "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
-    last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
-    final = sum(h["loss"] for h in last) / len(last)
-    artifacts.write_json(out / "manifest.json", {
-        "command": verb, "version": __version__, "checkpoint": str(ckpt), "steps": state.step,
-        "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
-        "final_loss_steps": len(last),
-        "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
-        "device": str(device), "torch": torch.__version__, "python": platform.python_version(),
-        "hydra_dir": info.log_dir, "runtime": runtime(), "config": cfg.record(),
-    })
+    last, final = _manifest(cfg, info, out, verb, spec, state, seconds, rollouts, device)
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "
         f"{seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")

@@ -16,7 +16,7 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-from ..artifacts import load_payload, save_checkpoint
+from ..artifacts import load_payload, non_finite, save_checkpoint
 from ..tasks.base import Task, Rng
 from ..utils.console import log
 from ..utils.io import ArtifactError
@@ -91,9 +91,11 @@ def fingerprint(policy: CommTransformer) -> str:
 
 
 def load_or_collect(path: Path, made_by: str, env: Task, policy: CommTransformer, rollouts: int, stride: int,
-                    gen: torch.Generator, device: torch.device) -> list[DataBucket]:
+                    gen: torch.Generator, device: torch.device, oracle_by: str = "neurosym train") -> list[DataBucket]:
     """The dataset D at ``path`` when it was collected from these oracle weights, else collected and saved there
-    (once per oracle, rollouts and stride: every synthesis run of a sweep reuses it)."""
+    (once per oracle, rollouts and stride: every synthesis run of a sweep reuses it). A D with a nan or inf is
+    never used: a saved one is collected again, a collected one is an error naming ``oracle_by``, the command that
+    trains the oracle."""
     oracle = fingerprint(policy)
     if Path(path).exists():
         try:
@@ -101,12 +103,21 @@ def load_or_collect(path: Path, made_by: str, env: Task, policy: CommTransformer
         except ArtifactError as e:
             log.warning("%s; collecting it again", e)
         else:
-            if payload.get("oracle") == oracle:
+            bad = non_finite(payload.get("buckets"), "buckets")
+            if bad:  # a nan in D scores every program nan: never searched on
+                log.warning("the dataset %s holds non-finite values (%s); collecting it again", path, bad)
+            elif payload.get("oracle") == oracle:
                 log.info("reusing the dataset %s", path)
                 return from_payload(payload)
-            log.info("the dataset %s came from other oracle weights; collecting it again", path)
+            else:
+                log.info("the dataset %s came from other oracle weights; collecting it again", path)
     t0 = time.perf_counter()
     data = collect(env, policy, rollouts, stride, gen, device)
+    bad = non_finite(to_payload(data)["buckets"], "buckets")
+    if bad:
+        raise ArtifactError(f"the oracle's rollouts reached non-finite values ({bad}; nothing saved): its weights "
+                            f"are finite but its task diverges; `{oracle_by} "
+                            "overwrite=true` with a smaller optim.lr, or smaller task scales (task.dt, task.v_max)")
     save_checkpoint(path, {**to_payload(data), "oracle": oracle})
     pairs = sum(b.states * b.n_agents ** 2 for b in data)
     log.info("collected D: %d rollouts, %d states, %.1fM agent pairs in %.0f s -> %s", rollouts,

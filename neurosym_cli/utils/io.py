@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
 import tempfile
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from ..config import UserError
-from ..errors import lies_under
+from ..errors import cut, lies_under, resource_problem
 
 
 class ArtifactError(UserError):
@@ -46,25 +47,64 @@ def check_inside(path: Path) -> None:
         raise ArtifactError(f"refusing to write {Path(path).resolve()}: it lies outside the runs root {_ROOTS[0]}")
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``path`` so that a reader sees the old file or the new one, never a part (temp file, fsync, rename)."""
+def _write_error(path: Path, e: OSError) -> ArtifactError:
+    e.filename = e.filename or str(path)  # a failed write() names no file: the artifact it was for
+    return ArtifactError(resource_problem(e) or f"cannot write {path}: {e.strerror or e}")
+
+
+@contextlib.contextmanager
+def atomic_file(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; renamed to ``path`` when the block ends without error, removed
+    when it fails (a full disk, Ctrl-C): a reader sees the old file or the new one, never a part. Errors of the
+    machine (no space, read-only) are one line (``errors.resource_problem``)."""
+    path = Path(path)
     check_inside(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    except OSError as e:
-        raise ArtifactError(f"cannot write {path}: {e.strerror or e}") from None
-    try:
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}")
         os.fchmod(fd, _MODE)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
+        os.close(fd)
+    except OSError as e:
+        raise _write_error(path, e) from None
+    tmp = Path(name)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as f:  # what the block wrote reaches the disk before it takes the name
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    except OSError as e:
+        raise _write_error(path, e) from None
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``path`` so that a reader sees the old file or the new one, never a part (temp file, fsync, rename)."""
+    with atomic_file(path) as tmp:
+        tmp.write_bytes(data)
+
+
+def write_together(files: Mapping[Path, bytes]) -> None:
+    """Write the files of one artifact (metrics.json and metrics.csv, a checkpoint and its history) all or none:
+    each goes to its temp file first and only then are they renamed, so a full disk leaves every one as it was."""
+    with contextlib.ExitStack() as stack:
+        tmps = {path: stack.enter_context(atomic_file(path)) for path in files}
+        for path, tmp in tmps.items():
+            tmp.write_bytes(files[path])
+
+
+def json_bytes(obj: Any) -> bytes:
+    return (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode()
+
+
+def csv_bytes(rows: Sequence[Mapping[str, Any]]) -> bytes:
+    buf = io.StringIO()
+    if rows:
+        w = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    return buf.getvalue().encode()
 
 
 def write_text(path: Path, text: str) -> None:
@@ -72,20 +112,38 @@ def write_text(path: Path, text: str) -> None:
 
 
 def write_json(path: Path, obj: Any) -> None:
-    write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+    atomic_write_bytes(path, json_bytes(obj))
 
 
 def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
-    buf = io.StringIO()
-    if rows:
-        w = csv.DictWriter(buf, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    write_text(path, buf.getvalue())
+    atomic_write_bytes(path, csv_bytes(rows))
 
 
-def read_json(path: Path) -> Any:
+Shape = Mapping[str, "type | tuple[type, ...]"] | Callable[[Any], bool]
+"""what a JSON record must be: an object with these fields of these types, or a test of the whole record"""
+
+
+def read_json(path: Path, remake: str | None = None, shape: Shape | None = None) -> Any:
+    """A JSON artifact; unreadable, not UTF-8, not JSON or not of ``shape`` is one ArtifactError that names
+    ``remake``, the command that writes it again (a reader never runs on a record of another shape)."""
+    again = f"; delete it and run `{remake}`, which writes it again" if remake else ""
     try:
-        return json.loads(Path(path).read_text())
+        obj = json.loads(Path(path).read_text())
     except (OSError, ValueError) as e:  # unreadable, not UTF-8, or not JSON
-        raise ArtifactError(f"cannot read {path}: {e}") from None
+        raise ArtifactError(f"cannot read {path}: {cut(e)}{again}") from None
+    if shape is None:
+        return obj
+    if callable(shape):
+        if not shape(obj):
+            raise ArtifactError(f"{path} is not a record of the shape neurosym writes{again}")
+        return obj
+    if not isinstance(obj, dict):
+        raise ArtifactError(f"{path} holds a JSON {type(obj).__name__}, not the object neurosym writes{again}")
+    for key, typ in shape.items():
+        if not isinstance(obj.get(key), typ) or isinstance(obj.get(key), bool) and bool not in _types(typ):
+            raise ArtifactError(f"{path}: {key!r} is missing or of another type than neurosym writes{again}")
+    return obj
+
+
+def _types(typ: "type | tuple[type, ...]") -> tuple[type, ...]:
+    return typ if isinstance(typ, tuple) else (typ,)

@@ -13,6 +13,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
+from ..errors import resource_problem
 from .io import ArtifactError, check_inside
 
 try:
@@ -30,7 +31,8 @@ def run_lock(directory: Path) -> Iterator[None]:
         directory.mkdir(parents=True, exist_ok=True)
         fd = os.open(directory / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
     except OSError as e:
-        raise ArtifactError(f"cannot write to {directory}: {e.strerror or e}") from None
+        e.filename = e.filename or str(directory)
+        raise ArtifactError(resource_problem(e) or f"cannot write to {directory}: {e.strerror or e}") from None
     try:
         if fcntl is not None:
             try:

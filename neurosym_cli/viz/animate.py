@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..episode import EpisodeRecord
-from ..utils.io import check_inside
+from ..utils.io import atomic_file
 from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
@@ -145,24 +145,21 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
             frames.append(scene.frame())
     finally:
         scene.close()
-    check_inside(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
-    if path.suffix == ".mp4":
-        h, w, _ = frames[0].shape
-        h2, w2 = h - h % 2, w - w % 2  # yuv420p needs even sizes
-        cmd = ["ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w2}x{h2}",
-               "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vcodec", "libx264", str(tmp)]
-        subprocess.run(cmd, input=b"".join(f[:h2, :w2].tobytes() for f in frames), check=True)
-    else:
-        # one palette for every frame (the first frame's colours plus the edge colours): fast, small, no flicker
-        # the palette comes from a mosaic of frames across the episode, by octree (keeps small areas of distinct
-        # colour, the agents, that a pixel-count method gives to the background's shades)
-        sample = frames[:: max(1, len(frames) // 6)]
-        palette = Image.fromarray(np.concatenate(sample)).quantize(colors=255, method=Image.Quantize.FASTOCTREE)
-        quant = [Image.fromarray(f).quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
-        quant[0].save(tmp, format="GIF", save_all=True, append_images=quant[1:], duration=int(1000 / fps), loop=0)
-    tmp.replace(path)
+    with atomic_file(path) as tmp:
+        if path.suffix == ".mp4":
+            h, w, _ = frames[0].shape
+            h2, w2 = h - h % 2, w - w % 2  # yuv420p needs even sizes
+            cmd = ["ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w2}x{h2}",
+                   "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vcodec", "libx264", str(tmp)]
+            subprocess.run(cmd, input=b"".join(f[:h2, :w2].tobytes() for f in frames), check=True)
+        else:
+            # one palette for every frame (the first frame's colours plus the edge colours): fast, small, no flicker
+            # the palette comes from a mosaic of frames across the episode, by octree (keeps small areas of distinct
+            # colour, the agents, that a pixel-count method gives to the background's shades)
+            sample = frames[:: max(1, len(frames) // 6)]
+            palette = Image.fromarray(np.concatenate(sample)).quantize(colors=255, method=Image.Quantize.FASTOCTREE)
+            quant = [Image.fromarray(f).quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
+            quant[0].save(tmp, format="GIF", save_all=True, append_images=quant[1:], duration=int(1000 / fps), loop=0)
     return path, len(frames)
 
 

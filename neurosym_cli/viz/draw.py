@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..utils.io import check_inside
+from ..utils.io import atomic_file
 
 GROUP_COLORS = ("#4e79a7", "#f28e2b", "#59a14f", "#b07aa1", "#76b7b2", "#edc948", "#9c755f", "#ff9da7")
 """agents and goals by group (formation tasks); unlabeled agents all take the first"""
@@ -61,10 +61,9 @@ def edge_segments(pos: np.ndarray, mask: np.ndarray, shrink: float = 0.0) -> tup
 def save_figure(fig, path: Path) -> Path:
     """Write a figure atomically (temp file, then rename) and close it."""
     plt = matplotlib_agg()
-    check_inside(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
-    fig.savefig(tmp, bbox_inches="tight", pad_inches=0.12)  # legends below the axes are kept, never clipped
-    plt.close(fig)
-    tmp.replace(path)
+    try:
+        with atomic_file(path) as tmp:
+            fig.savefig(tmp, bbox_inches="tight", pad_inches=0.12)  # legends below the axes are kept, never clipped
+    finally:
+        plt.close(fig)
     return path
