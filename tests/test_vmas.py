@@ -1,4 +1,4 @@
-"""VMAS scenarios as tasks (neurosym_cli/tasks/vmas.py, docs/vmas.md): nested task names, gradients from the cost
+"""VMAS scenarios as tasks (neurosym_cli/tasks/vmas/, docs/vmas.md): nested task names, gradients from the cost
 through VMAS's physics to the policy's parameters, seeded determinism, the pipeline end to end, a user's own
 BaseScenario from outside the package through train/synth/eval, and the one-line refusals. The task contract
 itself runs over the VMAS tasks in tests/test_tasks.py. Tests that need VMAS skip when the extra is missing."""
