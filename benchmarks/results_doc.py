@@ -415,29 +415,33 @@ def collect_vmas(exp: Path, wall: float | None = None) -> None:
     path = RESULTS / f"vmas-{out['task'].split('/')[-1]}.json"
     path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
     print(f"wrote {path}: {len(out['baselines'])} baselines")
-    for gif in sorted(exp.glob("render/prog-retrained-*/episode0.gif")):
-        vmas_episode_figures(gif, DOCS / "figures" / f"{path.stem}-prog-retrained-episode0")
+    heard = {e["label"]: e["summary"]["max_in"]["mean"] for e in out["baselines"].values()}
+    for gif in sorted(exp.glob("render/*/episode0.gif")):  # what `neurosym render ... episode=0` drew
+        if heard.get(gif.parent.name):  # an episode without edges says nothing about whom agents hear
+            vmas_episode_figures(gif, DOCS / "figures" / f"{path.stem}-{gif.parent.name}-episode0")
 
 
 def vmas_episode_figures(gif: Path, stem: Path, frames: int = 4) -> None:
-    """`neurosym render`'s animation -> <stem>.gif (a copy) and <stem>.png: ``frames`` of its frames side by side
-    (the start, evenly spaced steps, the end), each with the edges the program chose at that step."""
+    """`neurosym render`'s animation -> <stem>.gif (a copy) and <stem>.png: ``frames`` of its frames in a 2-column
+    grid (the start, evenly spaced steps, the end), each with the edges used at that step."""
     import shutil
 
     from PIL import Image
 
-    shutil.copyfile(gif, stem.with_suffix(".gif"))
+    gif_out, png_out = Path(f"{stem}.gif"), Path(f"{stem}.png")  # labels hold dots (lam0.5): no with_suffix
+    shutil.copyfile(gif, gif_out)
     with Image.open(gif) as im:
         picks = [round(k * (im.n_frames - 1) / (frames - 1)) for k in range(frames)]
         shots = []
         for k in picks:
             im.seek(k)
             shots.append(im.convert("RGB"))
-    strip = Image.new("RGB", (sum(x.width for x in shots), max(x.height for x in shots)), "white")
+    w, h, cols = max(x.width for x in shots), max(x.height for x in shots), 2  # a 2-column grid stays readable
+    grid = Image.new("RGB", (cols * w, -(-len(shots) // cols) * h), "white")
     for k, x in enumerate(shots):
-        strip.paste(x, (sum(y.width for y in shots[:k]), 0))
-    strip.save(stem.with_suffix(".png"))
-    print(f"drew {stem.with_suffix('.png')} (frames {picks} of {gif})")
+        grid.paste(x, ((k % cols) * w, (k // cols) * h))
+    grid.save(png_out)
+    print(f"drew {png_out} (frames {picks} of {gif})")
 
 
 def draw_vmas() -> None:
@@ -485,14 +489,20 @@ def vmas(task: str) -> str:
     out += ["", "The synthesized program (`neurosym show-program` prints the same):", "", "```", v["program"], "```", ""]
     for rules in parse(v["program"]).rounds:
         out += [f"- rule {k}: {describe(rule, vocab(task, 'v1'))}" for k, rule in enumerate(rules, start=1)]
-    gif = DOCS / "figures" / f"{name}-prog-retrained-episode0.gif"
-    png = gif.with_suffix(".png")
-    if png.exists():
-        out += ["", f"Evaluation episode 0 under prog-retrained at its start, two evenly spaced steps and its end, "
-                f"each frame with the edges the program chose at that step (red: who hears whom; "
-                f"`neurosym render task={task} budget=vmas baseline=prog-retrained episode=0`"
-                + (f"; animated: [{gif.name}](figures/{gif.name})" if gif.exists() else "") + "):", "",
-                f"![{task}: episode 0 under prog-retrained](figures/{png.name})"]
+    labels = {b[k]["label"]: k for k in b}
+    shots = [p for p in sorted((DOCS / "figures").glob(f"{name}-*-episode0.png"))
+             if p.name.removeprefix(f"{name}-").removesuffix("-episode0.png") in labels]
+    if b["prog-retrained"]["summary"]["max_in"]["mean"] == 0:
+        out += ["", "The program hears nobody, so an episode under prog-retrained has no edges to draw; the "
+                "hard-attn episode shows whom the oracle itself picks (its K = 2 largest attention logits)."]
+    for png in shots:
+        label = png.name.removeprefix(f"{name}-").removesuffix("-episode0.png")
+        gif = png.with_suffix(".gif")
+        out += ["", f"Evaluation episode 0 under {label} at its start, two evenly spaced steps and its end, each "
+                f"frame with the edges used at that step (`neurosym render task={task} budget=vmas "
+                f"baseline={labels[label]} episode=0`" + (f"; animated: [{gif.name}](figures/{gif.name})"
+                                                         if gif.exists() else "") + "):", "",
+                f"![{task}: episode 0 under {label}](figures/{png.name})"]
     tr = v["training"]
     out += ["", "Training loss, mean over each 10 optimizer steps of 8 episodes (the same episodes for every model):",
             "", "| model | steps | seconds | loss every 10 steps |", "|---|---:|---:|---|"]
@@ -500,8 +510,12 @@ def vmas(task: str) -> str:
             for k, t in sorted(tr.items())]
     total = sum(v["stage_seconds"].values())
     wall = v.get("wall_seconds", total)
-    out += ["", f"Wall time: {wall / 60:.1f} min for the pipeline on one thread of the busy 2-core machine "
-            f"(stages: {', '.join(f'{k} {s:.0f} s' for k, s in v['stage_seconds'].items())})."]
+    verbs: dict[str, list[float]] = {}
+    for stage, sec in v["stage_seconds"].items():
+        verbs.setdefault(stage.split()[0], []).append(sec)
+    out += ["", f"Wall time: {wall / 60:.1f} min for the pipeline on one thread of the busy 2-core machine ("
+            + ", ".join(f"{verb} {sum(x):.0f} s over {len(x)} stage{'s' * (len(x) > 1)}" for verb, x in verbs.items())
+            + ")."]
     return "\n".join(out + ["", "Claims of the paper, checked the same way as on its tasks (paired differences "
                              "over the evaluation seeds, 95 % t interval):", ""]
                      + [f"- {line}" for line in vmas_claims(v)])
