@@ -2,13 +2,16 @@
 
     python benchmarks/bench_vmas.py                        # N = 4 and 8, B = 8, T = 30 (a few minutes)
     python benchmarks/bench_vmas.py --sizes 4 8 16 --json docs/results/bench-vmas.json
+    python benchmarks/bench_vmas.py --sizes 6 --tasks vmas-navigation vmas-nolidar vmas-dispersion ring
 
 Tasks, each at team size N: ``vmas/navigation`` as shipped (VMAS's own observation, 12 lidar rays, contact
-forces), the same without the scenario's observation (``scenario_obs=false``: no lidar), and the native ring
-(examples/ring: single-integrator agents, the same transformer widths but for Ds). Training = forward and backward
-of B episodes of T steps with full soft attention (the oracle's step); evaluation = the same rollout under
-no_grad with the metrics. Time per part comes from wrapping the task's methods (observe, step, cost) and timing
-the policy's forward and the backward separately; VMAS's share of step is the simulator itself.
+forces), the same without the scenario's observation (``scenario_obs=false``: no lidar, the task
+vmas/navigation-nolidar), ``vmas/dispersion`` (``--tasks vmas-dispersion``: its observation lists every food
+item; no lidar, no collisions), and the native ring (examples/ring: single-integrator agents, the same
+transformer widths but for Ds). Training = forward and backward of B episodes of T steps with full soft
+attention (the oracle's step); evaluation = the same rollout under no_grad with the metrics. Time per part
+comes from wrapping the task's methods (observe, step, cost) and timing the policy's forward and the backward
+separately; VMAS's share of step is the simulator itself.
 """
 
 from __future__ import annotations
@@ -57,7 +60,10 @@ def make(kind: str, n: int, horizon: int):
         import ring
 
         return make_task(ring.RingConfig(agents_per_group=n), horizon)
-    over = ["task=vmas/navigation", f"task.team_sizes=[{n}]", f"task.test_sizes=[{n}]"]
+    scenario = "dispersion" if kind == "vmas-dispersion" else "navigation"
+    over = [f"task=vmas/{scenario}", f"task.team_sizes=[{n}]", f"task.test_sizes=[{n}]"]
+    if kind == "vmas-dispersion":
+        over.append(f"task.agents_per_group={n}")
     if kind == "vmas-nolidar":
         over.append("task.scenario_obs=false")
     return make_task(compose_config("train", over).task, horizon)
@@ -101,11 +107,13 @@ def main() -> None:
     ap.add_argument("--horizon", type=int, default=30)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--tasks", nargs="+", default=["vmas-navigation", "vmas-nolidar", "ring"],
+                    choices=["vmas-navigation", "vmas-nolidar", "vmas-dispersion", "ring"])
     ap.add_argument("--json", type=Path)
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     rows = [measure(k, n, a.batch, a.horizon, a.repeats) for n in a.sizes
-            for k in ("vmas-navigation", "vmas-nolidar", "ring")]
+            for k in a.tasks]
     print(f"B = {a.batch}, T = {a.horizon}, {a.threads} thread(s), best of {a.repeats}")
     print("| task | N | train rollouts/s | eval rollouts/s | train: observe / step / cost / backward / policy+rest (s) |")
     print("|---|---:|---:|---:|---|")

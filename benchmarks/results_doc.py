@@ -38,6 +38,7 @@ with a 95 % t-interval.
 from __future__ import annotations
 
 import argparse
+import csv
 import functools
 import json
 import re
@@ -374,52 +375,185 @@ def draw_stress(task: str) -> None:
         print(f"drew {DOCS / 'figures' / (task + '-stress.png')}")
 
 
+VMAS_METRICS = METRICS + ("on_goal", "covered", "success")
+VMAS_COMMAND = ("neurosym pipeline task={task} budget=vmas threads=1 plots=false "
+                "\"baselines=[tf-full,hard-attn,dist,prog,prog-retrained,expo,comm-range,no-comm]\" "
+                "baseline=comm-range baseline.radius=0.5")
+
+
+def collect_vmas(exp: Path, wall: float | None = None) -> None:
+    """A VMAS scenario's run directory (docs/vmas.md, 'Results') -> docs/results/vmas-<scenario>.json: every
+    baseline's summary (mean, std, 95 % t half-width over the evaluation seeds) and per-seed losses, the program,
+    each trained model's training (loss every 10 steps, seconds), the stage times and the measured wall time."""
+    out: dict = {"baselines": {}, "training": {}}
+    for f in sorted(exp.glob("eval/*/metrics.json")):
+        m = json.loads(f.read_text())
+        c = m["config"]
+        out.update(task=f"vmas/{c['task']['name'].removeprefix('vmas-')}", seeds=m["seeds"],
+                   episodes_per_seed=m["episodes_per_seed"], training_seed=c["seed"], budget=c["budget"],
+                   horizon=c["task"]["horizon"], comm_range_radius=0.5)
+        out["baselines"][m["baseline"]] = {
+            "label": m["label"],
+            "summary": {k: {x: m["summary"][k][x] for x in ("mean", "std", "ci95")} for k in VMAS_METRICS
+                        if k in m["summary"]},
+            "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
+        if _has_program(m):
+            out["program"] = (exp / "synth" / m["label"].removeprefix(m["baseline"] + "-") / "program.txt"
+                              ).read_text().strip()
+    for f in sorted(exp.glob("train/*/manifest.json")):
+        man = json.loads(f.read_text())
+        with open(f.parent / "history.csv") as h:
+            losses = [float(r["loss"]) for r in csv.DictReader(h)]
+        out["training"][f.parent.name] = {
+            "steps": len(losses), "rollouts": man["rollouts"], "seconds": round(man["seconds_this_run"], 1),
+            "loss_every_10_steps": [round(sum(losses[i:i + 10]) / len(losses[i:i + 10]), 3)
+                                    for i in range(0, len(losses), 10)]}
+    out["command"] = VMAS_COMMAND.format(task=out["task"])
+    out["stage_seconds"] = json.loads((exp / "pipeline_timings.json").read_text())
+    if wall is not None:
+        out["wall_seconds"] = wall
+    path = RESULTS / f"vmas-{out['task'].split('/')[-1]}.json"
+    path.write_text(json.dumps(out, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {path}: {len(out['baselines'])} baselines")
+    heard = {e["label"]: e["summary"]["max_in"]["mean"] for e in out["baselines"].values()}
+    for gif in sorted(exp.glob("render/*/episode0.gif")):  # what `neurosym render ... episode=0` drew
+        if heard.get(gif.parent.name):  # an episode without edges says nothing about whom agents hear
+            vmas_episode_figures(gif, DOCS / "figures" / f"{path.stem}-{gif.parent.name}-episode0")
+
+
+def vmas_episode_figures(gif: Path, stem: Path, frames: int = 4) -> None:
+    """`neurosym render`'s animation -> <stem>.gif (a copy) and <stem>.png: ``frames`` of its frames in a 2-column
+    grid (the start, evenly spaced steps, the end), each with the edges used at that step."""
+    import shutil
+
+    from PIL import Image
+
+    gif_out, png_out = Path(f"{stem}.gif"), Path(f"{stem}.png")  # labels hold dots (lam0.5): no with_suffix
+    shutil.copyfile(gif, gif_out)
+    with Image.open(gif) as im:
+        picks = [round(k * (im.n_frames - 1) / (frames - 1)) for k in range(frames)]
+        shots = []
+        for k in picks:
+            im.seek(k)
+            shots.append(im.convert("RGB"))
+    w, h, cols = max(x.width for x in shots), max(x.height for x in shots), 2  # a 2-column grid stays readable
+    grid = Image.new("RGB", (cols * w, -(-len(shots) // cols) * h), "white")
+    for k, x in enumerate(shots):
+        grid.paste(x, ((k % cols) * w, (k // cols) * h))
+    grid.save(png_out)
+    print(f"drew {png_out} (frames {picks} of {gif})")
+
+
+def draw_vmas() -> None:
+    """docs/figures/vmas-<scenario>.png (loss, degrees, loss against max in-degree; 95 % t intervals over the
+    evaluation seeds) from the VMAS result files alone."""
+    from neurosym_cli.plotting import figure2
+
+    for f in sorted(RESULTS.glob("vmas-*.json")):
+        r = json.loads(f.read_text())
+        b = r["baselines"]
+        rows = [(b[k]["label"], b[k]["summary"]) for k in _vmas_order(b)]
+        title = (f"{r['task']} ({r['budget']['name']} budget, train seed {r['training_seed']}): "
+                 f"mean ± 95 % t interval over {r['seeds']} eval seeds")
+        figure2(rows, title.replace(": ", ":\n"), DOCS / "figures" / f"{f.stem}.png", err="ci95")
+        print(f"drew {DOCS / 'figures' / (f.stem + '.png')}")
+
+
+def _vmas_order(b: dict) -> list[str]:
+    return sorted(b, key=lambda k: (ORDER.index(k) if k in ORDER else len(ORDER), k))
+
+
 def vmas(task: str) -> str:
-    """A VMAS scenario's run (docs/results/vmas-<scenario>.json, written by the run in docs/vmas.md): the table with
-    the 95 % t interval over the evaluation seeds, the program with its reading, and the claims checked on it."""
-    f = RESULTS / f"vmas-{task.split('/')[-1]}.json"
+    """A VMAS scenario's run (docs/results/vmas-<scenario>.json, written by --collect-vmas): the table with the 95 %
+    t interval over the evaluation seeds, the loss-degree figure, the program with its reading, the rendered
+    episode, the training, and the paper's claims checked the same way as on its tasks (paired differences)."""
+    name = f"vmas-{task.split('/')[-1]}"
+    f = RESULTS / f"{name}.json"
     if not f.exists():
         return f"Not yet run: no result file `{f.relative_to(DOCS)}`."
-    r = json.loads(f.read_text())
-    b = r["baselines"]
-    order = [k for k in ORDER if k in b] + sorted(k for k in b if k not in ORDER)
-
-    def ci(k: str) -> tuple[float, float]:
-        return mean_ci(list(b[k]["per_seed_cost"]))
-
-    n_seeds = len(next(iter(b.values()))["per_seed_cost"])
-    extra = [m for m in ("on_goal", "covered", "collisions") if m in next(iter(b.values()))["summary"]]
-    out = [f"`{r['command']}` (training seed {r['training_seed']}; {n_seeds} evaluation seeds). Loss: mean ± 95 % "
-           "Student-t interval over the evaluation seeds of this one trained model; degrees and the task's own "
-           "metrics: means.", "",
+    v = json.loads(f.read_text())
+    b = v["baselines"]
+    extra = [m for m in ("on_goal", "covered", "success", "collisions") if m in b["tf-full"]["summary"]]
+    out = [f"`{v['command']}` (training seed {v['training_seed']}; {v['seeds']} evaluation seeds of "
+           f"{v['episodes_per_seed']} episodes, T = {v['horizon']}). Loss and degrees: mean ± 95 % Student-t "
+           "interval over the evaluation seeds of this one trained model; the scenario's own metrics: means.", "",
            "| baseline | loss | max in-degree | max out-degree | " + " | ".join(extra) + " |",
            "|---|---:|---:|---:|" + "---:|" * len(extra)]
-    for k in order:
-        m, h = ci(k)
+    for k in _vmas_order(b):
         sm = b[k]["summary"]
-        out.append(f"| {b[k]['label']} | {m:.2f} ± {h:.2f} | {sm['max_in']['mean']:.2f} | {sm['max_out']['mean']:.2f} | "
+        ci = lambda m: f"{sm[m]['mean']:.2f} ± {sm[m]['ci95']:.2f}"  # noqa: E731
+        out.append(f"| {b[k]['label']} | {ci('cost')} | {ci('max_in')} | {ci('max_out')} | "
                    + " | ".join(f"{sm[e]['mean']:.3f}" for e in extra) + " |")
-    text = "\n".join(ln for ln in r["program"].splitlines() if not ln.startswith("#"))
-    out += ["", "The synthesized program:", "", "```", text, "```", ""]
-    v = vocab(task, "v1")
-    for rules in parse(text).rounds:
-        out += [f"- rule {k}: {describe(rule, v)}" for k, rule in enumerate(rules, start=1)]
-    if all(x in b for x in ("tf-full", "no-comm", "prog-retrained")):
-        (tf, tfh), (nc, nch), (pr, prh) = ci("tf-full"), ci("no-comm"), ci("prog-retrained")
-        comm_matters = tf + tfh < nc - nch  # the oracle's interval lies below no-comm's
-        close = abs(pr - tf) <= 0.05 * abs(tf)
-        sparse = b["prog-retrained"]["summary"]["max_degree"]["mean"] < b["tf-full"]["summary"]["max_degree"]["mean"]
-        out += ["", "Claims of the paper, checked the same way as for its tasks:",
-                f"- communication matters (tf-full below no-comm, intervals apart): {tf:.2f} vs {nc:.2f} -> "
-                f"**{'supported' if comm_matters else 'not supported'}**",
-                f"- prog-retrained within 5 % of tf-full: {pr:.2f} vs {tf:.2f} ({100 * (pr - tf) / tf:+.1f} %) -> "
-                f"**{'supported' if close else 'not supported'}**",
-                f"- prog-retrained with a smaller max degree than tf-full -> **{'supported' if sparse else 'not supported'}**"]
-        if not comm_matters:
-            out.append("- Where hearing nobody is as good as hearing everybody, the second and third claims say "
-                       "nothing about the method: the search's best program is then the silent one "
-                       "(docs/vmas.md, 'Results', says why and what budget would make it a test).")
-    return "\n".join(out)
+    if (DOCS / "figures" / f"{name}.png").exists():
+        out += ["", f"![{task}: loss vs max degree](figures/{name}.png)"]
+    out += ["", "The synthesized program (`neurosym show-program` prints the same):", "", "```", v["program"], "```", ""]
+    for rules in parse(v["program"]).rounds:
+        out += [f"- rule {k}: {describe(rule, vocab(task, 'v1'))}" for k, rule in enumerate(rules, start=1)]
+    labels = {b[k]["label"]: k for k in b}
+    shots = [p for p in sorted((DOCS / "figures").glob(f"{name}-*-episode0.png"))
+             if p.name.removeprefix(f"{name}-").removesuffix("-episode0.png") in labels]
+    if b["prog-retrained"]["summary"]["max_in"]["mean"] == 0:
+        out += ["", "The program hears nobody, so an episode under prog-retrained has no edges to draw; the "
+                "hard-attn episode shows whom the oracle itself picks (its K = 2 largest attention logits)."]
+    for png in shots:
+        label = png.name.removeprefix(f"{name}-").removesuffix("-episode0.png")
+        gif = png.with_suffix(".gif")
+        out += ["", f"Evaluation episode 0 under {label} at its start, two evenly spaced steps and its end, each "
+                f"frame with the edges used at that step (`neurosym render task={task} budget=vmas "
+                f"baseline={labels[label]} episode=0`" + (f"; animated: [{gif.name}](figures/{gif.name})"
+                                                         if gif.exists() else "") + "):", "",
+                f"![{task}: episode 0 under {label}](figures/{png.name})"]
+    tr = v["training"]
+    out += ["", "Training loss, mean over each 10 optimizer steps of 8 episodes (the same episodes for every model):",
+            "", "| model | steps | seconds | loss every 10 steps |", "|---|---:|---:|---|"]
+    out += [f"| {k} | {t['steps']} | {t['seconds']:.0f} | {' '.join(f'{x:.2f}' for x in t['loss_every_10_steps'])} |"
+            for k, t in sorted(tr.items())]
+    total = sum(v["stage_seconds"].values())
+    wall = v.get("wall_seconds", total)
+    verbs: dict[str, list[float]] = {}
+    for stage, sec in v["stage_seconds"].items():
+        verbs.setdefault(stage.split()[0], []).append(sec)
+    out += ["", f"Wall time: {wall / 60:.1f} min for the pipeline on one thread of the busy 2-core machine ("
+            + ", ".join(f"{verb} {sum(x):.0f} s over {len(x)} stage{'s' * (len(x) > 1)}" for verb, x in verbs.items())
+            + ")."]
+    return "\n".join(out + ["", "Claims of the paper, checked the same way as on its tasks (paired differences "
+                             "over the evaluation seeds, 95 % t interval):", ""]
+                     + [f"- {line}" for line in vmas_claims(v)])
+
+
+def vmas_claims(v: dict) -> list[str]:
+    """The paper's claims on a VMAS run, each line with its numbers and its verdict; failures stay in, with why."""
+    pr, b = "prog-retrained", v["baselines"]
+    lines = []
+
+    def lower(a: str, than: str, what: str) -> bool:
+        d = paired(v, a, than)
+        ok = d[0] + d[1] < 0
+        note = "" if ok else (" (lower on average, not significant)" if d[0] < 0 else "")
+        lines.append(f"{what}: {mean(v, a):.3f} vs {mean(v, than):.3f} (paired difference {pm(d, 3)}){note} -> "
+                     f"{verdict(ok)}")
+        return ok
+
+    comm = lower("tf-full", "no-comm", "communication matters (tf-full below no-comm)")
+    g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
+    lines.append(f"prog-retrained close to tf-full (within 5 %): {mean(v, pr):.3f} vs {mean(v, 'tf-full'):.3f}, "
+                 f"{g:+.1f} % (paired difference {pm(d, 3)}) -> {verdict(abs(g) <= 5)}")
+    lower(pr, "dist", "prog-retrained better than dist")
+    lower(pr, "no-comm", "prog-retrained below no-comm")
+    d = paired(v, "prog", pr)
+    lines.append(f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.3f} vs {mean(v, pr):.3f} "
+                 f"(paired difference {pm(d, 3)}) -> {verdict(d[0] - d[1] > 0)}")
+    for m, words, other in (("max_out", "max out-degree", "hard-attn"), ("max_degree", "max degree", "tf-full")):
+        lines.append(f"prog-retrained {words} lower than {other}: {ms(v, pr, m)} vs "
+                     f"{ms(v, other, m)} (mean ± std) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
+    for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
+        if other in b:
+            lower(pr, other, f"beyond the paper: prog-retrained better than {b[other]['label']}")
+    if not comm:
+        lines.append("where hearing nobody is as good as hearing everybody, the claims about the program say little "
+                     "about the method: the search's best program is then one that hears little or nobody, and "
+                     "every comparison is within the noise of this small budget (docs/vmas.md, 'Results').")
+    return lines
 
 
 def stress(task: str) -> str:
@@ -981,6 +1115,10 @@ def main() -> None:
                     help="first write docs/results/rl-<task>.json from a run directory where `neurosym rl` ran")
     ap.add_argument("--collect-noisy", default="", metavar="EXP",
                     help="first write docs/results/<task>.json from a link-failure run directory (appendix E)")
+    ap.add_argument("--collect-vmas", default="", metavar="EXP",
+                    help="first write docs/results/vmas-<scenario>.json from a VMAS run directory (docs/vmas.md)")
+    ap.add_argument("--wall", type=float, default=None, metavar="S",
+                    help="with --collect-vmas: the measured wall seconds of the pipeline")
     ap.add_argument("--seeds", default=str(SEEDS), metavar="DIR",
                     help="the seed files to render the training-seed sections from (default docs/results/seeds)")
     ap.add_argument("--out", default="", metavar="FILE",
@@ -998,6 +1136,10 @@ def main() -> None:
         collect_rl(Path(a.collect_rl))
     if a.collect_noisy:
         collect_noisy(Path(a.collect_noisy))
+    if a.collect_vmas:
+        collect_vmas(Path(a.collect_vmas), a.wall)
+    if a.collect_vmas or a.figures:
+        draw_vmas()
     if a.collect or a.figures or a.collect_select or a.collect_stress or a.collect_rl:
         draw_figures()
         for task in VARIANTS:

@@ -247,7 +247,8 @@ def _vmas(name):
 TASKS = {"random-cross": lambda: _paper("random-cross"), "random-grid": lambda: _paper("random-grid"),
          "unlabeled-goals": lambda: _paper("unlabeled-goals"), "two-groups-cross": lambda: _paper("two-groups-cross"),
          "ring": _ring, "toy": lambda: ToyConfig(),
-         "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion")}
+         "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion"),
+         "vmas/navigation-nolidar": lambda: _vmas("vmas/navigation-nolidar")}
 
 
 def test_the_contract_covers_every_task_yaml():

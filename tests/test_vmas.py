@@ -1,4 +1,4 @@
-"""VMAS scenarios as tasks (neurosym_cli/tasks/vmas.py, docs/vmas.md): nested task names, gradients from the cost
+"""VMAS scenarios as tasks (neurosym_cli/tasks/vmas/, docs/vmas.md): nested task names, gradients from the cost
 through VMAS's physics to the policy's parameters, seeded determinism, the pipeline end to end, a user's own
 BaseScenario from outside the package through train/synth/eval, and the one-line refusals. The task contract
 itself runs over the VMAS tasks in tests/test_tasks.py. Tests that need VMAS skip when the extra is missing."""
@@ -251,7 +251,8 @@ def test_a_non_differentiable_step_is_refused_before_training(tmp_path, monkeypa
 @pytest.mark.slow
 def test_a_users_own_scenario_runs_train_synth_eval(tmp_path):
     """A BaseScenario subclass in a file outside the package, its YAML in the user's config directory, through
-    train, synth and eval at the tiny budget, with the scenario's own reward as the cost."""
+    train, synth and eval at the tiny budget, with the scenario's own reward as the cost; trained and evaluated
+    again from the same seed in another runs root, it gives the same weights and the same costs."""
     cd = _user_dir(tmp_path)
     common = ["task=reach", *COMMON]
     run(["train", *cd, *common], tmp_path)
@@ -259,6 +260,17 @@ def test_a_users_own_scenario_runs_train_synth_eval(tmp_path):
     run(["eval", *cd, *common, "baseline=prog"], tmp_path)
     m = json.loads((tmp_path / "reach/tiny/seed0/eval/prog-k2-lam0.5-v1/metrics.json").read_text())
     assert set(m["summary"]) >= {"cost", "collisions"} and m["summary"]["cost"]["mean"] > 0  # minus -distance
+    # the same seed, the same numbers: training and evaluation again in another runs root, weights and costs equal
+    again = tmp_path / "again"
+    run(["train", *cd, *common, f"runs_root={again}"], tmp_path)
+    for root in (tmp_path, again):
+        run(["eval", *cd, *common, "baseline=tf-full", f"runs_root={root}"], tmp_path)
+    w1, w2 = (torch.load(r / "reach/tiny/seed0/train/oracle/model.pt", weights_only=True)["state_dict"]
+              for r in (tmp_path, again))
+    assert w1.keys() == w2.keys() and all(torch.equal(w1[k], w2[k]) for k in w1)
+    e1, e2 = (json.loads((r / "reach/tiny/seed0/eval/tf-full/metrics.json").read_text())["per_seed"]
+              for r in (tmp_path, again))
+    assert [s["cost"] for s in e1] == [s["cost"] for s in e2] and len(e1) == 2
 
 
 @needs_vmas
