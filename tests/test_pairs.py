@@ -172,3 +172,31 @@ def test_random_rules_and_link_failure_do_not_depend_on_the_chunk_size(monkeypat
     d = state.pos[:, :, None].sub(state.pos[:, None]).norm(dim=-1)
     ok = whole[..., 0] >= 0
     assert (d.gather(2, whole[..., :1].clamp(min=0))[..., 0][ok] >= 1.0 - 0.3).all()  # noisy filter d >= 1
+
+
+def test_the_compiled_rows_are_the_torch_rows_bit_for_bit(monkeypatch):
+    from neurosym_cli.tasks import pair_kernels
+
+    if not pair_kernels.AVAILABLE:
+        pytest.skip("numba is not installed")
+    g = torch.Generator().manual_seed(2)
+    pos = torch.rand(2, 301, 2, generator=g) * 40 - 20
+    key = torch.randint(0, 2 ** 62, (2,), generator=g)
+    o = pairs.Offsets(pos, 0.05, key)
+    compiled = o.rows(10, 200)
+    uniforms = pairs.uniform_rows(key, 10, 200, 301)
+    monkeypatch.setattr(pair_kernels, "AVAILABLE", False)
+    assert torch.equal(compiled, o.rows(10, 200))
+    assert torch.equal(uniforms, pairs.uniform_rows(key, 10, 200, 301))
+    # the int32 hash wraps as the same hash in int64 arithmetic would (what the kernel's uint32 code computes)
+    x = torch.randint(-2 ** 31, 2 ** 31, (10000,), generator=g, dtype=torch.int64)
+    m = 0xFFFFFFFF
+
+    def mix64(v):
+        v = v ^ (v >> 16)
+        v = (v * 0x7FEB352D) & m
+        v = v ^ (v >> 15)
+        v = (v * 0x5BD1E995) & m
+        return v ^ (v >> 16)
+
+    assert torch.equal(pairs._mix32(x.to(torch.int32)).to(torch.int64) & m, mix64(x & m))

@@ -180,7 +180,7 @@ class LinkFailure:
         if ctx.obs.pairs is not None:  # a large team: a counter-based uniform per picked link (tasks/pairs.py)
             b, n, _ = pk.shape
             recv = torch.arange(n, device=pk.device).view(1, n, 1)
-            alive = counter_uniform(ctx.rng.keys(b), recv * n + pk.clamp(min=0)) >= self.p
+            alive = counter_uniform(ctx.rng.keys(b), (recv * n + pk.clamp(min=0)).to(torch.int32)) >= self.p
         else:
             alive = self._alive(ctx, ctx.obs.agent.shape).gather(-1, pk.clamp(min=0))  # (B, N, K)
         return pk.masked_fill(~alive, -1)

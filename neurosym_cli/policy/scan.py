@@ -17,7 +17,7 @@ from ..dsl.ast import Program, RandomRule
 from ..dsl.interpret import program_picks
 from ..tasks.base import Observation, Rng
 from ..tasks.features import FeatureMap
-from ..tasks.pairs import counter_uniform, pair_counter, rows_per_chunk
+from ..tasks.pairs import rows_per_chunk, uniform_rows
 
 
 class _RowUniforms:
@@ -30,8 +30,7 @@ class _RowUniforms:
     def rand(self, batch: int, rows: int, n: int) -> Tensor:
         key = self.keys[self.calls]
         self.calls += 1
-        counter = pair_counter(self.first, self.stop, self.n, key.device).unsqueeze(0).expand(batch, -1, -1)
-        return counter_uniform(key, counter)  # (B, R, N)
+        return uniform_rows(key, self.first, self.stop, self.n)  # (B, R, N)
 
 
 def scan_program(program: Program, round: int, fmap: FeatureMap, obs: Observation, rng: Rng) -> Tensor:

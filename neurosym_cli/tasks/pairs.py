@@ -31,9 +31,8 @@ else:
 PAIR_CHUNK = 1 << 21
 """pairs (B x receivers x N) an all-pairs scan holds at a time: each float32 feature of a chunk is 8 MiB, so a
 program's filter scan over v1's eight features stays under about 150 MiB whatever N is"""
-MAX_AGENTS = 46_000
-"""the counter of pair (i, j) is i N + j in 32 bits (the hash's input): teams up to this size"""
-_M32 = 0xFFFFFFFF
+MAX_AGENTS = 46_340
+"""the counter of pair (i, j) is i N + j in a signed 32-bit integer (the hash's input): teams up to this size"""
 
 
 def rows_per_chunk(batch: int, n: int, budget: int = PAIR_CHUNK) -> int:
@@ -42,42 +41,75 @@ def rows_per_chunk(batch: int, n: int, budget: int = PAIR_CHUNK) -> int:
 
 
 def _mix32(x: Tensor) -> Tensor:
-    """A 32-bit integer hash (xor-shift-multiply, constants below 2^31 so no int64 product overflows): int64 values
-    in [0, 2^32) -> int64 values in [0, 2^32), every output bit depending on every input bit."""
-    x = x ^ (x >> 16)
-    x = (x * 0x7FEB352D) & _M32
-    x = x ^ (x >> 15)
-    x = (x * 0x5BD1E995) & _M32
-    return x ^ (x >> 16)
+    """A 32-bit integer hash (xor-shift-multiply, lowbias32's first constant and MurmurHash2's), on int32 tensors:
+    products wrap modulo 2^32 as the hash wants (torch's integer kernels wrap; tests/test_pairs.py checks it
+    against the same hash in int64), and every right shift is masked, so it is a logical one."""
+    x = x ^ ((x >> 16) & 0xFFFF)
+    x = x * 0x7FEB352D
+    x = x ^ ((x >> 15) & 0x1FFFF)
+    x = x * 0x5BD1E995
+    return x ^ ((x >> 16) & 0xFFFF)
 
 
 def counter_bits(key: Tensor, counter: Tensor) -> Tensor:
-    """32 random bits per counter: key (B,) int64 (62 bits), counter (B, ...) int64 in [0, 2^32) -> (B, ...) int64."""
+    """32 random bits per counter: key (B,) int64 (62 bits), counter (B, ...) int32 (i N + j) -> (B, ...) int32.
+    int32, not int64: AVX2 has no 64-bit multiply, and the hash is the scan's largest cost."""
     shape = (-1,) + (1,) * (counter.dim() - 1)
-    lo, hi = (key & _M32).view(shape), ((key >> 32) & _M32).view(shape)
-    return _mix32(_mix32((counter + lo) & _M32) ^ hi)
+    lo = (key & 0x7FFFFFFF).to(torch.int32).view(shape)
+    hi = ((key >> 31) & 0x7FFFFFFF).to(torch.int32).view(shape)
+    return _mix32(_mix32(counter + lo) ^ hi)
+
+
+_TABLES: dict = {}
+
+
+def _box_muller_tables(device) -> tuple[Tensor, Tensor, Tensor]:
+    """(65536,) float32 each: the Box-Muller radius sqrt(-2 ln u1) and cos, sin of 2 pi u2 at the 16-bit levels
+    u = (k + 0.5) / 65536: looked up instead of computed per pair (four transcendentals per pair were most of the
+    scan's time)."""
+    key = str(device)
+    if key not in _TABLES:
+        u = (torch.arange(65536, dtype=torch.float32, device=device) + 0.5) * (1.0 / 65536)
+        a = (2 * torch.pi) * u
+        _TABLES[key] = (torch.sqrt(-2.0 * torch.log(u)), torch.cos(a), torch.sin(a))
+    return _TABLES[key]
 
 
 def counter_normal(key: Tensor, counter: Tensor) -> Tensor:
     """(B, ...) counters -> (B, ..., 2) standard normals by Box-Muller from the two 16-bit halves of one hash (the
     radius is cut at 4.9 sigma, the angle has 65,536 levels: plenty for an observation noise)."""
     h = counter_bits(key, counter)
-    u1 = ((h >> 16).float() + 0.5) * (1.0 / 65536)
-    u2 = ((h & 0xFFFF).float() + 0.5) * (1.0 / 65536)
-    r = torch.sqrt(-2.0 * torch.log(u1))
-    a = (2 * torch.pi) * u2
-    return torch.stack([r * torch.cos(a), r * torch.sin(a)], -1)
+    radius, cos, sin = _box_muller_tables(counter.device)
+    r = radius[(h >> 16) & 0xFFFF]
+    a = h & 0xFFFF
+    return torch.stack([r * cos[a], r * sin[a]], -1)
 
 
 def counter_uniform(key: Tensor, counter: Tensor) -> Tensor:
     """(B, ...) counters -> (B, ...) float32 uniforms in (0, 1), 24 bits each."""
-    return ((counter_bits(key, counter) >> 8).float() + 0.5) * (1.0 / (1 << 24))
+    return (((counter_bits(key, counter) >> 8) & 0xFFFFFF).float() + 0.5) * (1.0 / (1 << 24))
+
+
+def uniform_rows(key: Tensor, first: int, stop: int, n: int) -> Tensor:
+    """(B, stop - first, N) float32: counter_uniform(key, i N + j) of receivers first..stop-1 (a random rule's
+    scores in the filter scan), by the compiled kernel on a CPU (the same numbers)."""
+    from .pair_kernels import AVAILABLE
+
+    if not (AVAILABLE and key.device.type == "cpu"):
+        return counter_uniform(key, pair_counter(first, stop, n, key.device).unsqueeze(0).expand(key.shape[0], -1, -1))
+    import numpy as np
+
+    from .pair_kernels import uniform_rows as kernel
+
+    out = torch.empty(key.shape[0], stop - first, n)
+    for e, k in enumerate(key.tolist()):
+        kernel(np.int64(n), np.int64(k & 0x7FFFFFFF), np.int64((k >> 31) & 0x7FFFFFFF), np.int64(first), out[e].numpy())
+    return out
 
 
 def pair_counter(first: int, stop: int, n: int, device) -> Tensor:
-    """(stop - first, N) int64: the counter i N + j of receivers first..stop-1 and every j."""
-    i = torch.arange(first, stop, device=device, dtype=torch.long)
-    return i[:, None] * n + torch.arange(n, device=device, dtype=torch.long)[None, :]
+    """(stop - first, N) int32: the counter i N + j of receivers first..stop-1 and every j."""
+    return torch.arange(first * n, stop * n, device=device, dtype=torch.int32).view(stop - first, n)
 
 
 class Offsets:
@@ -103,17 +135,35 @@ class Offsets:
         bi = torch.arange(b, device=recv.device).view((b,) + (1,) * (recv.dim() - 1))
         o = self.pos[bi, send] - self.pos[bi, recv]
         if self.noise_std > 0:
-            o = o + self.noise_std * counter_normal(self.key, recv * n + send)
+            o = o + self.noise_std * counter_normal(self.key, (recv * n + send).to(torch.int32))
         return o
 
     def rows(self, first: int, stop: int) -> Tensor:
-        """(B, stop - first, N, 2): receivers first..stop-1, every j; [r, j] = x_j - x_(first + r) + noise."""
+        """(B, stop - first, N, 2): receivers first..stop-1, every j; [r, j] = x_j - x_(first + r) + noise. Without
+        gradients on a CPU, by the compiled kernel (tasks/pair_kernels.py: the same numbers)."""
         n = self.pos.shape[1]
+        if self.noise_std > 0 and _compiled(self.pos):
+            return self._rows_compiled(first, stop)
         o = self.pos[:, None, :, :] - self.pos[:, first:stop, None, :]
         if self.noise_std > 0:
             o = o + self.noise_std * counter_normal(self.key, pair_counter(first, stop, n, self.device).unsqueeze(0)
                                                     .expand(self.pos.shape[0], -1, -1))
         return o
+
+    def _rows_compiled(self, first: int, stop: int) -> Tensor:
+        import numpy as np
+
+        from .pair_kernels import noisy_rows
+
+        b, n = self.pos.shape[:2]
+        out = torch.empty(b, stop - first, n, 2)
+        tables = [t.numpy() for t in _box_muller_tables(self.pos.device)]
+        pos = self.pos.detach().contiguous().numpy()
+        keys = self.key.tolist()
+        for e in range(b):
+            noisy_rows(pos[e], np.int64(keys[e] & 0x7FFFFFFF), np.int64((keys[e] >> 31) & 0x7FFFFFFF), np.int64(first),
+                       np.float32(self.noise_std), *tables, out[e].numpy())
+        return out
 
     def dense(self) -> Tensor:
         """(B, N, N, 2): every pair (built in chunks of receivers, so the hash's temporaries stay bounded)."""
@@ -124,6 +174,14 @@ class Offsets:
     def nearest(self, k: int) -> Tensor:
         """(B, N, k) long: each agent's k nearest others by noise-free distance (dist's picks)."""
         return nearest(self.pos, k)
+
+
+def _compiled(pos: Tensor) -> bool:
+    """Whether ``Offsets.rows`` runs the compiled kernel: float32 on a CPU, numba present, no gradient wanted."""
+    from .pair_kernels import AVAILABLE
+
+    return (AVAILABLE and pos.device.type == "cpu" and pos.dtype == torch.float32
+            and not (torch.is_grad_enabled() and pos.requires_grad))
 
 
 def nearest(pos: Tensor, k: int) -> Tensor:
