@@ -50,6 +50,8 @@ class CommProvider(Protocol):
 class _Dense:
     """Mixin for providers that choose from the logits: no picks."""
 
+    picks_first = False
+
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
         return None
 
@@ -187,6 +189,14 @@ class LinkFailure:
 
     def __getattr__(self, name: str):  # the inner provider's program, trees, k, ...
         return getattr(self.inner, name)
+
+
+def picks_first(comm: CommProvider) -> bool:
+    """Whether the provider names whom each agent hears before any logit (``picks``: the sparse path, O(N K) pairs
+    with gradients) rather than choosing from the (B, N, N) logits (the dense path). A provider says so with
+    ``picks_first``; one that does not is taken to pick first unless it is a dense mixin."""
+    inner = getattr(comm, "inner", comm)
+    return bool(getattr(inner, "picks_first", not isinstance(inner, _Dense)))
 
 
 def comm_module(comm: CommProvider) -> torch.nn.Module | None:

@@ -118,6 +118,11 @@ class Offsets:
     eps_ij = counter_normal(key, i N + j) (module docstring)."""
 
     def __init__(self, pos: Tensor, noise_std: float, key: Tensor):
+        if pos.shape[1] > MAX_AGENTS:
+            from ..errors import ConfigError
+
+            raise ConfigError(f"{pos.shape[1]:,} agents: the sparse path's noise counters serve teams of up to "
+                              f"{MAX_AGENTS:,} (tasks/pairs.py MAX_AGENTS)")
         self.pos, self.noise_std, self.key = pos, noise_std, key  # (B, N, 2) world units, std, (B,) int64
 
     @property
