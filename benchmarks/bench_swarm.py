@@ -75,6 +75,21 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
                 for _ in range(3):
                     comm.picks(ctx, 0)
                 out["decision_us_per_agent"] = (time.perf_counter() - t0) / 3 / n * 1e6
+                # everything but the scan: the same steps under the picks computed once (a fixed rule)
+                fixed = [comm.picks(ctx, 0)]
+
+                class Fixed:
+                    name = "fixed"
+
+                    def select(self, ctx, logits, r):
+                        raise AssertionError("the sparse path asks for picks")
+
+                    def picks(self, ctx, r):
+                        return fixed[0]
+
+                t0 = time.perf_counter()
+                rollout(env, policy, Fixed(), state, rng, steps)
+                out["rest_seconds"] = (time.perf_counter() - t0) / steps
     else:
         state = env.reset(batch, gen)[0]
         rng = Rng(gen)
@@ -113,6 +128,7 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=1)
     ap.add_argument("--memory-gb", type=float, default=16.0, help="skip points whose estimate exceeds this")
     ap.add_argument("--modes", default="eval,train")
+    ap.add_argument("--table", help="print the tables of the JSON rows a previous run printed (one per line)")
     ap.add_argument("--one", nargs=3, metavar=("BASELINE", "N", "MODE"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
@@ -120,6 +136,10 @@ def main() -> None:
         steps = args.eval_steps if mode == "eval" else args.train_steps
         print(json.dumps(one(b, n, mode, steps, args.batch)))
         return
+    if args.table:
+        with open(args.table) as f:
+            rows = [json.loads(ln) for ln in f if ln.startswith("{")]
+        return tables(rows)
     sizes = [int(s) for s in args.sizes.split(",")]
     rows = []
     for mode in args.modes.split(","):
@@ -140,16 +160,26 @@ def main() -> None:
                         row.update(json.loads(r.stdout.strip().splitlines()[-1]))
                 rows.append(row)
                 print(json.dumps(row), flush=True)
+    tables(rows)
+
+
+def tables(rows: list[dict]) -> None:
+    """The markdown tables of docs/performance.md section 15 from the measured rows."""
+    sizes = sorted({r["n"] for r in rows})
+    modes = list(dict.fromkeys(r["mode"] for r in rows))
+    baselines = list(dict.fromkeys(r["baseline"] for r in rows))
     print()
     unit = {"eval": "s/step", "train": "s per 200-step rollout"}
-    for mode in args.modes.split(","):
+    for mode in modes:
         print(f"| {mode} ({unit[mode]}) | " + " | ".join(f"N = {n:,}" for n in sizes) + " | exponent (N >= 100) |")
         print("|---|" + "---:|" * (len(sizes) + 1))
-        for b in args.baselines.split(","):
+        for b in baselines:
             cells, pts = [], []
             for n in sizes:
-                r = next(r for r in rows if r["mode"] == mode and r["baseline"] == b and r["n"] == n)
-                if "seconds" in r:
+                r = next((r for r in rows if r["mode"] == mode and r["baseline"] == b and r["n"] == n), None)
+                if r is None:
+                    cells.append("-")
+                elif "seconds" in r:
                     cells.append(f"{r['seconds']:.3g} s, {r['peak_gb']:.2f} GB (est. {r['estimate_gb']:.2f})")
                     if n >= 100:
                         pts.append((n, r["seconds"]))
@@ -158,10 +188,17 @@ def main() -> None:
             exp = f"{slope(pts):.2f}" if len(pts) >= 2 else "-"
             print(f"| {b} | " + " | ".join(cells) + f" | {exp} |")
         print()
-    dec = [(r["n"], r["decision_us_per_agent"]) for r in rows if "decision_us_per_agent" in r]
+    dec = [r for r in rows if "decision_us_per_agent" in r]
     if dec:
-        print("program decision time per agent (the filter scan over all N candidates): " +
-              ", ".join(f"N = {n:,}: {us:.1f} us" for n, us in dec))
+        print("| prog evaluation step | " + " | ".join(f"N = {r['n']:,}" for r in dec) + " | exponent (N >= 100) |")
+        print("|---|" + "---:|" * (len(dec) + 1))
+        scan = [(r["n"], r["decision_us_per_agent"] * r["n"] / 1e6) for r in dec]
+        rest = [(r["n"], r["rest_seconds"]) for r in dec if "rest_seconds" in r]
+        for name, pts in (("filter scan (s)", scan), ("everything else (s)", rest)):
+            fit = [p for p in pts if p[0] >= 100]
+            exp = f"{slope(fit):.2f}" if len(fit) >= 2 else "-"
+            print(f"| {name} | " + " | ".join(f"{v:.3g}" for _, v in pts) + f" | {exp} |")
+        print("| decision per agent (us) | " + " | ".join(f"{r['decision_us_per_agent']:.1f}" for r in dec) + " | |")
 
 
 if __name__ == "__main__":
