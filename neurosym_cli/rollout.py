@@ -9,7 +9,7 @@ from torch import Tensor
 
 from .tasks.base import TaskState, Task, Rng
 from .policy.comm import CommContext, CommProvider
-from .policy.transformer import CommTransformer
+from .policy.transformer import CommTransformer, Heard
 
 
 @dataclass
@@ -37,12 +37,17 @@ METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
 """the metrics of every task and baseline; a task adds its own (``Task.metrics``)"""
 
 
-def degree_stats(masks: list[Tensor]) -> tuple[Tensor, Tensor, Tensor, Tensor]:
-    """masks: per round (B, N, N) bool (i hears j) -> (max_in, max_out, max_deg, mean_deg), each (B,)."""
-    out = torch.zeros(4, masks[0].shape[0], device=masks[0].device)
+def degree_stats(masks: list) -> tuple[Tensor, Tensor, Tensor, Tensor]:
+    """masks: per round (B, N, N) bool (i hears j), or a ``Heard`` (the sparse path's picks: the same counts without
+    the N x N mask) -> (max_in, max_out, max_deg, mean_deg), each (B,)."""
+    first = masks[0].picks if isinstance(masks[0], Heard) else masks[0]
+    out = torch.zeros(4, first.shape[0], device=first.device)
     for m in masks:
-        m = m.float()
-        deg_in, deg_out = m.sum(2), m.sum(1)  # (B, N): row sums = heard by i; column sums = hearing j
+        if isinstance(m, Heard):
+            deg_in, deg_out = m.degrees()  # integer counts: exact, whatever the order of the sums
+        else:
+            m = m.float()
+            deg_in, deg_out = m.sum(2), m.sum(1)  # (B, N): row sums = heard by i; column sums = hearing j
         deg = deg_in + deg_out
         out += torch.stack([deg_in.amax(1), deg_out.amax(1), deg.amax(1), deg.mean(1)])
     out /= len(masks)
@@ -77,7 +82,7 @@ def rollout(
             decisions.append(d)
         if stats:
             with torch.no_grad():
-                records.append(torch.stack(degree_stats(out.masks)))
+                records.append(torch.stack(degree_stats([h if isinstance(h, Heard) else h[1] for h in out.heard])))
                 for k, v in env.metrics(state).items():
                     extra.setdefault(k, []).append(v)
     cost = torch.stack(costs)  # (T, B)

@@ -24,6 +24,7 @@ class Feats:
         self.named = named
         any_pair = next(v for v in named.values() if v.shape[-1] == v.shape[-2])
         self.batch, self.n_agents = any_pair.shape[0], any_pair.shape[1]
+        self.rows, self.first = self.n_agents, 0  # every agent asks (a chunk of receivers: rows < N, first > 0)
         self.device = any_pair.device
 
     def __getitem__(self, name):

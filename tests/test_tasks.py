@@ -232,6 +232,13 @@ def _paper(name):
     return compose_config("train", [f"task={name}"]).task
 
 
+def _sparse_swarm():
+    """The swarm task on its sparse path (pair source, cell lists) at a size the contract can afford."""
+    import dataclasses
+
+    return dataclasses.replace(_paper("swarm"), agents_per_group=7, sparse_from=0)
+
+
 def _ring():
     sys.path.insert(0, str(ROOT / "examples" / "ring"))
     import ring  # noqa: F401  (the example, imported as neurosym imports it: from beside its config directory)
@@ -246,6 +253,7 @@ def _vmas(name):
 
 TASKS = {"random-cross": lambda: _paper("random-cross"), "random-grid": lambda: _paper("random-grid"),
          "unlabeled-goals": lambda: _paper("unlabeled-goals"), "two-groups-cross": lambda: _paper("two-groups-cross"),
+         "swarm": lambda: _paper("swarm"), "swarm-sparse": lambda: _sparse_swarm(),
          "ring": _ring, "toy": lambda: ToyConfig(),
          "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion"),
          "vmas/navigation-nolidar": lambda: _vmas("vmas/navigation-nolidar")}

@@ -18,11 +18,13 @@ class FeatureView(Protocol):
     """Named features of every pair (i, j) of a bucket."""
 
     batch: int  # B
-    n_agents: int  # N
+    rows: int  # R receivers i = first .. first + R - 1 (R = N, first = 0 for a whole bucket)
+    n_agents: int  # N candidates j
+    first: int
     device: torch.device
 
     def __getitem__(self, name: str) -> Tensor:
-        """(B, N, N), or (B, N, 1) for a feature of agent i alone."""
+        """(B, R, N), or (B, R, 1) for a feature of agent i alone."""
         ...
 
 
@@ -31,21 +33,21 @@ class UniformSource(Protocol):
 
 
 def linear(f: Linear, feats: FeatureView) -> Tensor:
-    """(B, N, N) value of sum_k w_k phi_k."""
-    b, n = feats.batch, feats.n_agents
+    """(B, R, N) value of sum_k w_k phi_k."""
+    b, r, n = feats.batch, feats.rows, feats.n_agents
     out = None
     for name, w in f.terms:
         term = feats[name] if w == 1.0 else w * feats[name]
         out = term if out is None else out + term
     if out is None:
-        return torch.zeros(b, n, n, device=feats.device)
-    return out.expand(b, n, n)
+        return torch.zeros(b, r, n, device=feats.device)
+    return out.expand(b, r, n)
 
 
 def cond(c: Cond, feats: FeatureView) -> Tensor:
-    """(B, N, N) bool: which j pass the filter of agent i (self not yet removed)."""
+    """(B, R, N) bool: which j pass the filter of agent i (self not yet removed)."""
     if isinstance(c, TrueCond):
-        return torch.ones(feats.batch, feats.n_agents, feats.n_agents, dtype=torch.bool, device=feats.device)
+        return torch.ones(feats.batch, feats.rows, feats.n_agents, dtype=torch.bool, device=feats.device)
     if isinstance(c, Test):
         return linear(c.lhs, feats) >= c.threshold
     if isinstance(c, And):
@@ -60,22 +62,22 @@ _OUT = torch.tensor(OUT)
 
 
 def rule_picks(r: Rule, feats: FeatureView, rng: UniformSource | None) -> Tensor:
-    """(B, N) long: the agent each agent i asks under rule r, or -1 when its filter passes nobody."""
-    b, n = feats.batch, feats.n_agents
-    passing = cond(r.cond, feats)  # (B, N, N) bool
+    """(B, R) long: the agent each agent i asks under rule r, or -1 when its filter passes nobody."""
+    b, rows, n = feats.batch, feats.rows, feats.n_agents
+    passing = cond(r.cond, feats)  # (B, R, N) bool
     if isinstance(r, ArgMaxRule):
         score = linear(r.score, feats)
     elif isinstance(r, RandomRule):
         if rng is None:
             raise ValueError("a random rule needs a random source")
-        score = rng.rand(b, n, n)  # the argmax of iid uniforms over the passing agents is a uniform pick
+        score = rng.rand(b, rows, n)  # the argmax of iid uniforms over the passing agents is a uniform pick
     else:
         raise TypeError(f"not a rule: {r!r}")
     # failing agents get OUT added rather than masked_fill(-inf): masked_fill and where with a scalar are ~4x
     # slower than this on CPU (measured on (6000, 30, 30): 22 ms vs 6 ms, one thread)
     masked = torch.addcmul(score, (~passing).to(score.dtype), _OUT.to(score.device))  # a new tensor
-    masked.diagonal(dim1=-2, dim2=-1).fill_(OUT)  # nobody asks itself
-    best, pick = masked.max(-1)  # (B, N) each; one pass gives both, faster than argmax plus a gather
+    masked.diagonal(offset=feats.first, dim1=-2, dim2=-1).fill_(OUT)  # nobody asks itself ([r, first + r])
+    best, pick = masked.max(-1)  # (B, R) each; one pass gives both, faster than argmax plus a gather
     # the filter passes somebody iff the best score is a real one
     return torch.where(best > OUT / 2, pick, -1)
 
@@ -110,7 +112,7 @@ def picks_to_mask(picks: Tensor, n: int) -> Tensor:
 
 
 def program_picks(p: Program, round: int, feats: FeatureView, rng: UniformSource | None) -> Tensor:
-    """(B, N, K) long: the agent each rule of the round picks for each agent i, -1 for nobody."""
+    """(B, R, K) long: the agent each rule of the round picks for each agent i, -1 for nobody."""
     return torch.stack([rule_picks(r, feats, rng) for r in p.rounds[round]], -1)
 
 

@@ -18,6 +18,8 @@ from ..dsl.ast import Program
 from ..dsl.interpret import picks_to_mask, program_picks
 from ..tasks.base import Observation, Rng, Task, TaskState, eye_mask, require
 from ..tasks.features import FeatureMap
+from ..tasks.pairs import counter_uniform
+from .scan import scan_program
 
 
 @dataclass
@@ -47,6 +49,8 @@ class CommProvider(Protocol):
 
 class _Dense:
     """Mixin for providers that choose from the logits: no picks."""
+
+    picks_first = False
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
         return None
@@ -113,6 +117,8 @@ class NearestComm:
         return picks_to_mask(self.picks(ctx, round), ctx.state.n_agents)
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        if ctx.obs.pairs is not None:  # a large team: a chunked scan, no (B, N, N) distances
+            return ctx.obs.pairs.nearest(self.k)
         d = require(ctx.env, "distances", "dist")(ctx.state)  # (B, N, N), +inf on the diagonal
         return d.topk(max(min(self.k, d.shape[-1] - 1), 0), dim=-1, largest=False).indices
 
@@ -130,8 +136,11 @@ class ProgramComm:
         return picks_to_mask(self.picks(ctx, round), ctx.obs.agent.shape[1])
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
+        r = min(round, self.program.n_rounds - 1)
+        if ctx.obs.pairs is not None:  # a large team: the filter scan in chunks of receivers (policy/scan.py)
+            return scan_program(self.program, r, self.fmap, ctx.obs, ctx.rng)
         feats = self.fmap.view(ctx.obs.agent, ctx.obs.rel)
-        return program_picks(self.program, min(round, self.program.n_rounds - 1), feats, ctx.rng)
+        return program_picks(self.program, r, feats, ctx.rng)
 
 
 class TreeComm(_Dense):
@@ -170,11 +179,24 @@ class LinkFailure:
         pk = self.inner.picks(ctx, round)
         if pk is None or pk.shape[-1] == 0:
             return pk
-        alive = self._alive(ctx, ctx.obs.agent.shape).gather(-1, pk.clamp(min=0))  # (B, N, K)
+        if ctx.obs.pairs is not None:  # a large team: a counter-based uniform per picked link (tasks/pairs.py)
+            b, n, _ = pk.shape
+            recv = torch.arange(n, device=pk.device).view(1, n, 1)
+            alive = counter_uniform(ctx.rng.keys(b), (recv * n + pk.clamp(min=0)).to(torch.int32)) >= self.p
+        else:
+            alive = self._alive(ctx, ctx.obs.agent.shape).gather(-1, pk.clamp(min=0))  # (B, N, K)
         return pk.masked_fill(~alive, -1)
 
     def __getattr__(self, name: str):  # the inner provider's program, trees, k, ...
         return getattr(self.inner, name)
+
+
+def picks_first(comm: CommProvider) -> bool:
+    """Whether the provider names whom each agent hears before any logit (``picks``: the sparse path, O(N K) pairs
+    with gradients) rather than choosing from the (B, N, N) logits (the dense path). A provider says so with
+    ``picks_first``; one that does not is taken to pick first unless it is a dense mixin."""
+    inner = getattr(comm, "inner", comm)
+    return bool(getattr(inner, "picks_first", not isinstance(inner, _Dense)))
 
 
 def comm_module(comm: CommProvider) -> torch.nn.Module | None:

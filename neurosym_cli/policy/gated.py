@@ -64,8 +64,10 @@ class GatedComm(nn.Module):
             self._degree.append((m.sum(2) + m.sum(1)).amax(1))  # (B,) max_i in + out, the paper's deg
         return mask
 
+    picks_first = False  # the gate needs the logits: dense path
+
     def picks(self, ctx, round: int) -> Tensor | None:
-        return None  # the gate needs the logits: dense path
+        return None
 
     def pop_step(self) -> tuple[Tensor, Tensor] | None:
         """The step just rolled out: ((B,) summed log-probability of every decision of every round, (B,) degree

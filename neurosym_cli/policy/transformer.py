@@ -14,7 +14,10 @@ still come from the original state s_i. The action is a linear read-out of the l
 Two paths compute the same round. The dense one scores all N^2 pairs and lets the provider choose from the
 logits (tf-full, hard-attn). The sparse one serves providers that know whom each agent hears before any logit
 (no-comm, dist, prog): it computes keys, logits and messages only for the B N K picked pairs, which makes
-training under a degree-K provider N/K times lighter in its (B, N, N, D) work (docs/performance.md).
+training under a degree-K provider N/K times lighter in its (B, N, N, D) work (docs/performance.md). For a large
+team the observation comes as a pair source (tasks/pairs.py ``Offsets``): the sparse round then computes o_ij and
+o_ji at the picked pairs only and returns whom each agent heard as picks (``Heard``), so nothing of size
+(B, N, N) is built and the gradients touch O(B N K) pairs (docs/performance.md, section 15).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from torch import Tensor, nn
 from ..config import ModelConfig
 from ..dsl.interpret import dedup_valid, picks_to_mask
 from ..tasks.base import Observation
+from ..tasks.pairs import Offsets
 from ..utils.ops import softmax_last
 
 Selector = Callable[[Tensor, int], Tensor]
@@ -51,10 +55,51 @@ def selected_attention(logits: Tensor, keep: Tensor, dense: bool = False) -> Ten
 
 
 @dataclass
+class Heard:
+    """Whom each agent heard in one round of the sparse path of a large team, kept as picks: the dense mask and
+    weights (B, N, N) are built only when asked for (a picture of a small team)."""
+
+    picks: Tensor  # (B, N, K) long, -1 = nobody
+    valid: Tensor  # (B, N, K) bool: the pick counts (not -1, not a repeat of an earlier rule's pick)
+    weights: Tensor  # (B, N, K) attention weight of each pick (0 where not valid)
+
+    @property
+    def n(self) -> int:
+        return self.picks.shape[1]
+
+    def mask(self) -> Tensor:
+        """(B, N, N) bool: i hears j."""
+        return picks_to_mask(torch.where(self.valid, self.picks, -1), self.n)
+
+    def attn(self) -> Tensor:
+        """(B, N, N) the weights a_ij (zero outside the mask)."""
+        b, n, _ = self.picks.shape
+        return torch.zeros(b, n, n, device=self.picks.device).scatter_add(-1, self.picks.clamp(min=0), self.weights)
+
+    def degrees(self) -> tuple[Tensor, Tensor]:
+        """(B, N) in-degree (agents heard) and (B, N) out-degree (agents that hear it), float counts: the row and
+        column sums of ``mask`` without building it."""
+        b, n, k = self.picks.shape
+        v = self.valid.to(torch.float32)
+        deg_out = torch.zeros(b, n, device=v.device).scatter_add(-1, self.picks.clamp(min=0).reshape(b, n * k),
+                                                                 v.reshape(b, n * k))
+        return v.sum(-1), deg_out
+
+
+@dataclass
 class PolicyOutput:
     action: Tensor  # (B, N, A)
-    attn: list[Tensor]  # per round (B, N, N): weights a_ij actually used (zero outside the mask)
-    masks: list[Tensor]  # per round (B, N, N) bool: who heard whom
+    heard: list  # per round: (weights (B, N, N), mask (B, N, N) bool) of the dense path, or a Heard (sparse)
+
+    @property
+    def attn(self) -> list[Tensor]:
+        """Per round (B, N, N): weights a_ij actually used (zero outside the mask)."""
+        return [h.attn() if isinstance(h, Heard) else h[0] for h in self.heard]
+
+    @property
+    def masks(self) -> list[Tensor]:
+        """Per round (B, N, N) bool: who heard whom."""
+        return [h.mask() if isinstance(h, Heard) else h[1] for h in self.heard]
 
 
 class CommRound(nn.Module):
@@ -105,33 +150,49 @@ class CommRound(nn.Module):
         agg = torch.bmm(w, self.value(x)) + (w.unsqueeze(-1) * msg_edge).sum(2)  # (B, N, D)
         return self._post(x, agg), attn
 
-    def aggregate_picks(self, x: Tensor, h: Tensor, rel: Tensor, picks: Tensor) -> tuple[Tensor, Tensor, Tensor]:
+    def aggregate_picks(self, x: Tensor, h: Tensor, rel: "Tensor | Offsets", picks: Tensor
+                        ) -> tuple[Tensor, "tuple[Tensor, Tensor] | Heard"]:
         """Sparse path: the round with its mask given as picks (B, N, K) long (-1 = nobody, repeats count once):
-        the same function as ``aggregate(x, logits(h, rel), mask)`` computed on the picked pairs only.
-        Returns the round output (B, N, D), the weights (B, N, N) and the mask (B, N, N) bool."""
+        the same function as ``aggregate(x, logits(h, rel), mask)`` computed on the picked pairs only. Returns
+        the round output (B, N, D) and whom each agent heard: (weights (B, N, N), mask (B, N, N) bool) for a dense
+        ``rel``, a ``Heard`` for a pair source (nothing of size N^2 built)."""
         b, n, k = picks.shape
         valid = dedup_valid(picks) if k else torch.zeros_like(picks, dtype=torch.bool)  # (B, N, K)
-        mask = picks_to_mask(torch.where(valid, picks, -1), n)
         if k == 0:  # nobody is heard: the aggregate is zero and no logit or message is needed
-            return self._post(x, torch.zeros_like(x)), torch.zeros(b, n, n, device=x.device), mask
-        y, attn_k = self.picked_round(x, h, rel, picks, valid)
+            y, attn_k = self._post(x, torch.zeros_like(x)), torch.zeros(b, n, 0, device=x.device)
+        else:
+            y, attn_k = self.picked_round(x, h, rel, picks, valid)
+        if isinstance(rel, Offsets):
+            return y, Heard(picks, valid, attn_k)
+        mask = picks_to_mask(torch.where(valid, picks, -1), n)
+        if k == 0:
+            return y, (torch.zeros(b, n, n, device=x.device), mask)
         attn = torch.zeros(b, n, n, device=x.device).scatter_add(-1, picks.clamp(min=0), attn_k)  # repeats: 0
-        return y, attn, mask
+        return y, (attn, mask)
 
-    def picked_round(self, x: Tensor, h: Tensor, rel: Tensor, picks: Tensor, valid: Tensor) -> tuple[Tensor, Tensor]:
+    def picked_round(self, x: Tensor, h: Tensor, rel: "Tensor | Offsets", picks: Tensor, valid: Tensor
+                     ) -> tuple[Tensor, Tensor]:
         """The sparse round's output (B, N, D) and weights over the picks (B, N, K), for K >= 1 picks (B, N, K) and
-        which of them count, ``valid`` (B, N, K) bool (dedup_valid). What policy export traces (no mask built)."""
+        which of them count, ``valid`` (B, N, K) bool (dedup_valid). What policy export traces (no mask built).
+        ``rel``: the dense o_ij (B, N, N, Dp), or a pair source that computes the 2 B N K views read here."""
         b, n, k = picks.shape
-        p = rel.shape[-1]  # Dp
         idx = picks.clamp(min=0)
         # the logits before the messages: the order the graph is built in is the order autograd sums gradients
         # into the state, and every checkpoint was trained with this one
         q = self.query(h) * self.scale  # (B, N, D)
-        o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, p))  # (B, N, K, Dp): receiver i's view of j
+        if isinstance(rel, Offsets):
+            recv = torch.arange(n, device=idx.device).view(1, n, 1).expand(b, n, k)
+            o_ij = rel.at(recv, idx)  # (B, N, K, 2): receiver i's view of j, computed here
+        else:
+            p = rel.shape[-1]  # Dp
+            o_ij = rel.gather(2, idx.unsqueeze(-1).expand(b, n, k, p))  # (B, N, K, Dp): receiver i's view of j
         logits = self.picked_logits(q, o_ij)  # (B, N, K)
-        # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
-        send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
-        o_ji = rel.reshape(b, n * n, p).gather(1, send.expand(-1, -1, p)).view(b, n, k, p)
+        if isinstance(rel, Offsets):
+            o_ji = rel.at(idx, recv)  # (B, N, K, 2): the sender's view of the receiver
+        else:
+            # the message j -> i uses the sender's view o_ji = rel[j, i]: flat index j N + i of the (N N) pairs
+            send = (idx * n + torch.arange(n, device=idx.device).view(1, n, 1)).reshape(b, n * k, 1)
+            o_ji = rel.reshape(b, n * n, p).gather(1, send.expand(-1, -1, p)).view(b, n, k, p)
         v = self.value(x)  # (B, N, D)
         v_j = v.gather(1, idx.reshape(b, n * k, 1).expand(-1, -1, v.shape[-1])).view(b, n, k, -1)  # (B, N, K, D)
         return self.combine(x, logits, self.message(v_j, o_ji), valid)
@@ -182,15 +243,15 @@ class CommTransformer(nn.Module):
         """``picks``, when given and not None for a round, replaces ``select`` there (sparse path)."""
         h = torch.relu(self.embed(obs.agent))  # (B, N, D)
         x = h
-        attn, masks = [], []
+        heard = []
         for r, layer in enumerate(self.rounds):
             pk = picks(r) if picks is not None else None
             if pk is None:
                 logits = layer.logits(h, obs.rel)
                 mask = select(logits.detach(), r)
                 x, a = layer.aggregate(x, logits, mask, obs.rel)
+                heard.append((a, mask))
             else:
-                x, a, mask = layer.aggregate_picks(x, h, obs.rel, pk)
-            attn.append(a)
-            masks.append(mask)
-        return PolicyOutput(self.head(x), attn, masks)
+                x, got = layer.aggregate_picks(x, h, obs.pairs if obs.pairs is not None else obs.rel, pk)
+                heard.append(got)
+        return PolicyOutput(self.head(x), heard)

@@ -50,6 +50,10 @@ class CommRange(OwnRule):
         # (random-cross with every group present, 8 episodes, T = 200, one thread) a training step took 4.4-6.0 s
         # padded against 4.5-7.4 s dense in four paired runs on a busy 2-core machine (1.0x-1.85x, median 1.2x),
         # since the degree stays far below N - 1 (benchmarks/bench_comm_paths.py --set task.group_prob=1)
+        if ctx.obs.pairs is not None:  # a large team: the cell list's neighbours, no (B, N, N) distances
+            from ..tasks.pairs import within
+
+            return within(ctx.state.pos, self.radius)
         near = self.mask(ctx, round)
         k = int(near.sum(-1).max())
         heard, idx = near.to(ctx.obs.agent.dtype).topk(k, dim=-1)  # any order: the transformer dedups picks

@@ -92,6 +92,11 @@ class OwnRule(OwnModel):
     def provider(self, cfg: "RunConfig", env: Any = None) -> "OwnRule":
         return self
 
+    @property
+    def picks_first(self) -> bool:
+        """A rule that writes ``picks`` runs on the sparse path (policy/comm.py ``picks_first``)."""
+        return type(self).picks is not OwnRule.picks
+
     def picks(self, ctx: "CommContext", round: int) -> "Tensor | None":
         return None
 

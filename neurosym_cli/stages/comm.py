@@ -20,6 +20,23 @@ def baseline_comm(cfg: RunConfig, task=None) -> CommProvider:
     return with_link_failure(cfg.baseline.provider(cfg, task), cfg.task.link_failure)
 
 
+def check_memory(cfg: RunConfig, task, comm: CommProvider, training: bool) -> None:
+    """Refuse, in one line with the estimate and the largest team that fits, a run whose largest episode cannot fit
+    in the memory available (policy/footprint.py), before anything is allocated. Evaluation batches every test
+    episode of every seed with the same N; training ``budget.batch_rollouts`` episodes over the horizon."""
+    from ..policy.comm import picks_first
+    from ..policy.footprint import require_fits
+
+    n = getattr(cfg.task, "max_agents", None)
+    if n is None:
+        return
+    per_seed = len(cfg.task.test_settings) or cfg.task.eval_episodes
+    batch = cfg.budget.batch_rollouts if training else per_seed * cfg.budget.eval_seeds
+    what = f"{cfg.baseline.name} {'training' if training else 'evaluation'}"
+    require_fits(what, n, batch, cfg.horizon, task.rounds, cfg.model, cfg.rules, not picks_first(comm), training,
+                 getattr(cfg.task, "sparse_from", 1 << 62))
+
+
 def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:
     """Load an rl checkpoint's gate (``comm_state``) into ``comm``'s gate module; a fixed rule has none."""
     gate = comm_module(comm)
@@ -74,6 +91,7 @@ def load_baseline(cfg: RunConfig, device, task=None):
     policy = artifacts.policy_from_payload(payload).to(device)
     task = task or make_task(cfg.task, cfg.horizon)
     comm = baseline_comm(cfg, task)
+    check_memory(cfg, task, comm, training=False)
     load_gate(comm, payload, paths.train_dir(cfg) / "model.pt", paths.train_command(cfg))
     if (gate := comm_module(comm)) is not None:
         gate.to(device)

@@ -12,6 +12,7 @@ from typing import Any
 from .. import paths
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
+from ..policy.footprint import DoesNotFit
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
@@ -40,7 +41,9 @@ def stress_point(cfg: RunConfig, agents: int, failure: float) -> dict[str, Any]:
     from ..tasks import make_task, require
 
     task = dataclasses.replace(cfg.task, agents_per_group=agents, link_failure=failure)
-    c = dataclasses.replace(cfg, task=task)  # exp_dir is unchanged: the weights and programs trained at the task's N
+    # the memory check counts the episodes evaluated at once: stress.seeds seeds' worth, not the budget's
+    c = dataclasses.replace(cfg, task=task, budget=dataclasses.replace(cfg.budget, eval_seeds=cfg.stress.seeds))
+    # exp_dir is unchanged: the weights and programs trained at the task's N
     env = require(make_task(cfg.task, cfg.horizon), "with_team_size", "stress (other team sizes)")(agents)
     device = resolve_device(c.device)
     seed_everything(c.seed)
@@ -62,29 +65,35 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     t0 = time.perf_counter()
     results: list[dict[str, Any]] = []
     skipped: dict[str, str] = {}
+    stops: dict[str, dict[str, Any]] = {}  # label -> the smallest team that does not fit, and why
     for name in cfg.stress.baselines:
         b = dataclasses.replace(cfg, baseline=with_run(cfg, name), cmd="eval")
         label = paths.baseline_label(b)
         done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:
+            n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents  # type: ignore[attr-defined]
             try:
                 r = done[(n, f)] if (n, f) in done else stress_point(b, n, f)
                 done[(n, f)] = r
+            except DoesNotFit as e:  # estimated before allocating: the baseline stops here, the others go on
+                if label not in stops or n_total < stops[label]["max_agents"]:
+                    stops[label] = {"agents_per_group": n, "max_agents": n_total, "why": str(e)}
+                log.warning("stress: %s stops at %d per group: %s", label, n, e)
+                continue
             except UserError as e:  # not trained here (or no program): say so and go on with the others
                 skipped[label] = str(e)
                 log.warning("stress: skipped %s: %s", label, e)
                 break
-            n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents  # type: ignore[attr-defined]
             results.append({"baseline": name, "label": label, "axis": axis, "agents_per_group": n,
                             "max_agents": n_total, "link_failure": f, **r})
             log.info("stress %s: %d per group, link failure %g: loss %.3f, max in-degree %.2f (%s elapsed)", label,
                      n, f, r["cost"]["mean"], r["max_in"]["mean"], clock(time.perf_counter() - t0))
-    if not results:
+    if not results and not stops:
         raise UserError("stress: no baseline of stress.baselines is trained here; "
                         f"`neurosym pipeline task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` makes them")
     out = Path(cfg.exp_dir) / "stress"
     write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
-                                     "seeds": cfg.stress.seeds, "results": results, "skipped": skipped,
+                                     "seeds": cfg.stress.seeds, "results": results, "skipped": skipped, "stops": stops,
                                      "seconds": time.perf_counter() - t0, "runtime": runtime(),
                                      "config": cfg.record()})
     write_csv(out / "stress.csv", [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
@@ -92,12 +101,12 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     from ..plotting import stress_plot
 
     png = stress_plot(results, cfg, out / "stress.png") if cfg.plots else None
-    print_stress(results, cfg)
+    print_stress(results, cfg, stops)
     say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out / 'stress.csv'}" + (f", {png}" if png else ""))
     return {"points": len(results)}
 
 
-def print_stress(results: list[dict], cfg: RunConfig) -> None:
+def print_stress(results: list[dict], cfg: RunConfig, stops: dict[str, dict] | None = None) -> None:
     from rich.table import Table
 
     from ..utils.console import console
@@ -126,3 +135,11 @@ def print_stress(results: list[dict], cfg: RunConfig) -> None:
                                                    f"{r['max_out']['mean']:.2f}")
             t.add_row(label, *cells)
         console.print(t)
+    for label in dict.fromkeys(r["label"] for r in results if r["axis"] == "agents"):
+        ran = max(r["max_agents"] for r in results if r["label"] == label and r["axis"] == "agents")
+        stop = (stops or {}).get(label)
+        say(f"{label}: ran up to N = {ran:,}" + (f"; stops at N = {stop['max_agents']:,}: {stop['why']}" if stop
+                                                 else "; every size of stress.agents fits"))
+    for label, stop in (stops or {}).items():
+        if not any(r["label"] == label for r in results):
+            say(f"{label}: stops at N = {stop['max_agents']:,}: {stop['why']}")

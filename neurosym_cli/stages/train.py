@@ -26,7 +26,7 @@ from ..utils.lock import run_lock
 from ..utils.tracking import Tracker, open_tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
-from .comm import baseline_comm, comm_identity, load_gate
+from .comm import baseline_comm, check_memory, comm_identity, load_gate
 
 class Tracked:
     """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
@@ -130,6 +130,7 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
 
     Writes <train_dir>/model.pt every few steps (atomically), history.csv and manifest.json. ``made_under``
     identifies the program or tree of a retraining: a checkpoint made under another one is never resumed."""
+    check_memory(cfg, env, comm, training=True)  # a team that cannot fit is one line, before anything is allocated
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,

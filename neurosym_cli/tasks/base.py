@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from torch import Tensor
 
     from .features import FeatureMap
+    from .pairs import Offsets
 else:
     torch = LazyModule("torch")
 
@@ -99,13 +100,35 @@ def group_by_agents(states: Sequence[S], keys: Sequence) -> list[tuple[S, list]]
     return [(concat_states([states[i] for i in idx]), [keys[i] for i in idx]) for _, idx in sorted(by_n.items())]
 
 
-@dataclass(frozen=True)
 class Observation:
-    """What the agents see at one step."""
+    """What the agents see at one step: ``agent`` (B, N, Ds) each agent's private input s_i, and o_ij, agent i's
+    (noisy) view of agent j (paper section 2), with [..., :2] = x_j - x_i by convention (distance-based features
+    and schemes read the first two columns).
 
-    agent: Tensor  # (B, N, Ds) each agent's private input s_i
-    rel: Tensor  # (B, N, N, Dp) o_ij: agent i's (noisy) view of agent j (paper section 2); [..., :2] = x_j - x_i
-    # by convention, so that distance-based features and schemes read the first two columns
+    ``rel`` is given either as the dense tensor (B, N, N, Dp) or as a pair source computed where read
+    (tasks/pairs.py ``Offsets``: the sparse path of large teams, kept in ``pairs``); reading ``rel`` of a pair
+    source builds the dense tensor once (what a dense provider needs)."""
+
+    __slots__ = ("agent", "pairs", "_rel")
+
+    def __init__(self, agent: Tensor, rel: "Tensor | Offsets"):
+        self.agent = agent  # (B, N, Ds)
+        lazy = not isinstance(rel, torch.Tensor)
+        self.pairs: Offsets | None = rel if lazy else None  # type: ignore[assignment]
+        self._rel: Tensor | None = None if lazy else rel  # type: ignore[assignment]
+
+    @property
+    def rel(self) -> Tensor:
+        """(B, N, N, Dp) o_ij, built from the pair source on first read when there is one."""
+        if self._rel is None:
+            assert self.pairs is not None
+            self._rel = self.pairs.dense()
+        return self._rel
+
+    @property
+    def rel_shape(self) -> tuple[int, ...]:
+        """(B, N, N, Dp) without building anything."""
+        return tuple(self.pairs.shape if self.pairs is not None else self.rel.shape)
 
 
 @dataclass(frozen=True)
@@ -150,6 +173,10 @@ class Rng:
 
     def rand(self, batch: int, *shape: int) -> Tensor:
         return self._draw(torch.rand, batch, shape)
+
+    def keys(self, batch: int) -> Tensor:
+        """(B,) int64 in [0, 2^62): one counter-based key per episode (tasks/pairs.py: the sparse path's noise)."""
+        return self._draw(lambda shape, **kw: torch.randint(0, 2**62, shape, **kw), batch, ())
 
 
 class EpisodeSeeder(Protocol):

@@ -45,19 +45,21 @@ class FeatureMap:
     def names(self) -> list[str]:
         return self.vocab.names
 
-    def view(self, agent: Tensor, rel: Tensor) -> "FeatureView":
-        """The features of one bucket's observation: agent (B, N, Ds), rel (B, N, N, Dp)."""
-        return FeatureView(self, agent, rel)
+    def view(self, agent: Tensor, rel: Tensor, first: int = 0) -> "FeatureView":
+        """The features of one bucket's observation: agent (B, N, Ds), rel (B, N, N, Dp); or of a chunk of R
+        receivers first..first+R-1 (the sparse path's filter scan): agent (B, R, Ds), rel (B, R, N, Dp)."""
+        return FeatureView(self, agent, rel, first)
 
 
 class FeatureView:
-    """A bucket's features, looked up by name and computed once each."""
+    """A bucket's features, looked up by name and computed once each. ``rows`` receivers (agent i = first + r)
+    against ``n_agents`` candidates j: rows = N and first = 0 for a whole bucket."""
 
-    def __init__(self, fmap: FeatureMap, agent: Tensor, rel: Tensor):
+    def __init__(self, fmap: FeatureMap, agent: Tensor, rel: Tensor, first: int = 0):
         self.fmap, self.version = fmap, fmap.version
-        self.batch, self.n_agents = agent.shape[0], agent.shape[1]
+        self.batch, self.rows, self.n_agents, self.first = agent.shape[0], rel.shape[1], rel.shape[2], first
         self.device = agent.device
-        self.agent, self.rel = agent, rel  # (B, N, Ds), (B, N, N, Dp)
+        self.agent, self.rel = agent, rel  # (B, R, Ds), (B, R, N, Dp)
         self._cache: dict[str, Tensor] = {}
         self.names = fmap.names
 

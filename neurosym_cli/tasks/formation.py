@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from ..utils.lazy import LazyModule
 from .base import EpisodeSeeder, Observation, Rng, Scene, TaskState, clip_speed, pairwise_distances, safe_norm
 from .features import Columns, FeatureMap, vector_map
-from .planar import PlanarConfig, relative_observation
+from .planar import PlanarConfig, close_pair_count, relative_observation
 from .sampling import sample_in_boxes
 
 if TYPE_CHECKING:
@@ -101,7 +101,7 @@ class FormationTask:
     def observe(self, state: FormationState, rng: Rng) -> Observation:
         # o_ij before s_i: the order the graph is built in is the order autograd sums the gradients into x, and
         # every checkpoint was trained with this one
-        rel = relative_observation(state.pos, self.cfg.noise_std, rng)
+        rel = relative_observation(state.pos, self.cfg.noise_std, rng, self.cfg.sparse_from)
         return Observation(agent=state.pos - state.goal, rel=rel)
 
     def target(self, action: Tensor) -> Tensor:
@@ -126,16 +126,50 @@ class FormationTask:
         return d, same, upper
 
     def collision_cost(self, state: FormationState) -> Tensor:
-        """(B,) ramp max(0, p (2 - d_ij / d)) over unordered pairs; across groups with the inter-group p, d."""
+        """(B,) ramp max(0, p (2 - d_ij / d)) over unordered pairs; across groups with the inter-group p, d. From
+        ``sparse_from`` agents on over the pairs within the ramps' reach only (a cell list): the same terms, summed
+        in another order."""
         c = self.cfg
+        if state.n_agents >= c.sparse_from:
+            return self._collision_cost_near(state)
         d, same, upper = self._pair_geometry(state)
         p_across = c.collision_inter_group_weight
         weight = torch.where(same, c.collision_weight, p_across) * upper  # (B, N, N): p of each pair, 0 off i < j
         slope = weight / torch.where(same, c.collision_dist, c.collision_inter_group_dist)  # p / d
         return torch.relu(2 * weight - d * slope).sum((1, 2))  # one fused ramp for both kinds of pairs
 
+    def _ramp(self, same: Tensor) -> tuple[Tensor, Tensor]:
+        """same (...) bool: the pair is of one group -> the ramp's weight p and slope p / d of each pair."""
+        c = self.cfg
+        weight = torch.where(same, c.collision_weight, c.collision_inter_group_weight)
+        return weight, weight / torch.where(same, c.collision_dist, c.collision_inter_group_dist)
+
+    @property
+    def ramp_reach(self) -> float:
+        """World units beyond which no ramp is positive: 2 d_c within groups, 2 d across (0: no ramp at all)."""
+        c = self.cfg
+        return max(2 * c.collision_dist if c.collision_weight else 0.0,
+                   2 * c.collision_inter_group_dist if c.collision_inter_group_weight else 0.0)
+
+    def _collision_cost_near(self, state: FormationState) -> Tensor:
+        """The collision ramps over the pairs a cell list finds within ``ramp_reach`` (exact: a pair beyond it
+        adds relu(<= 0) = 0 and no gradient in the dense sum)."""
+        from .pairs import close_pairs
+
+        b, n = state.batch, state.n_agents
+        out = torch.zeros(b, dtype=state.pos.dtype, device=state.pos.device)
+        if self.ramp_reach <= 0:
+            return out
+        first, second = close_pairs(state.pos, self.ramp_reach)
+        flat, grp = state.pos.reshape(-1, 2), state.group.reshape(-1)
+        d = safe_norm(flat[first] - flat[second])  # (P,) as the dense d_ij
+        weight, slope = self._ramp(grp[first] == grp[second])
+        return out.index_add(0, first // n, torch.relu(2 * weight - d * slope))
+
     def metrics(self, state: FormationState) -> dict[str, Tensor]:
         """Per step, (B,) each: collisions, the number of unordered pairs closer than the collision distance d_c."""
+        if state.n_agents >= self.cfg.sparse_from:
+            return {"collisions": close_pair_count(state.pos, self.cfg.collision_dist)}
         d, _, upper = self._pair_geometry(state)
         return {"collisions": ((d < self.cfg.collision_dist) & upper).sum((1, 2)).to(d.dtype)}
 

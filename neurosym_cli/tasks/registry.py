@@ -129,7 +129,7 @@ def probe(task: Any, name: str) -> None:
     b, n = s.batch, s.n_agents
     want = {"agent": (b, n, task.obs_dim), "rel": (b, n, n, task.pair_dim)}
     for field, shape in want.items():
-        got = tuple(getattr(obs, field).shape)
+        got = tuple(obs.agent.shape if field == "agent" else obs.rel_shape)  # a pair source is not built here
         if got != shape:
             raise ConfigError(f"task {name}: observe() gives {field} of shape {got}, but obs_dim/pair_dim declare "
                               f"{shape}")

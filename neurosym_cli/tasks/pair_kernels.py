@@ -1,0 +1,59 @@
+"""Compiled CPU kernel of the sparse path's filter scan (numba): the noisy offsets of a chunk of receivers in one
+pass, the counter hash and the Box-Muller look-up fused per pair (about 13x faster than the same arithmetic as
+eager torch ops on one core, docs/performance.md section 15). It computes exactly the numbers of the torch code in
+tasks/pairs.py (``Offsets.rows``), the reference, which serves gradients, GPUs and machines without numba
+(tests/test_pairs.py compares them bit for bit)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:  # numba is a dependency; the torch code of tasks/pairs.py is the fallback
+    from numba import njit
+
+    AVAILABLE = True
+except ImportError:  # pragma: no cover - exercised only on machines without numba
+    AVAILABLE = False
+
+    def njit(*args, **kwargs):  # type: ignore[no-redef]
+        return lambda f: f
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+
+@njit(inline="always", **_JIT)
+def _mix32(x: np.uint32) -> np.uint32:
+    """tasks/pairs.py ``_mix32`` on an unsigned 32-bit value (the same bits as its int32 form)."""
+    x ^= x >> np.uint32(16)
+    x = np.uint32((np.uint64(x) * np.uint64(0x7FEB352D)) & np.uint64(0xFFFFFFFF))
+    x ^= x >> np.uint32(15)
+    x = np.uint32((np.uint64(x) * np.uint64(0x5BD1E995)) & np.uint64(0xFFFFFFFF))
+    return x ^ (x >> np.uint32(16))
+
+
+@njit(**_JIT)
+def noisy_rows(pos: np.ndarray, lo: np.int64, hi: np.int64, first: np.int64, sigma: np.float32,
+               radius: np.ndarray, cos: np.ndarray, sin: np.ndarray, out: np.ndarray) -> None:
+    """out (R, N, 2) float32 <- o_ij of receivers first..first+R-1 of one episode: pos (N, 2) float32, the key's
+    31-bit halves lo and hi, the noise std sigma, the Box-Muller tables (65536,) each."""
+    n = pos.shape[0]
+    for r in range(out.shape[0]):
+        i = first + r
+        xi, yi = pos[i, 0], pos[i, 1]
+        for j in range(n):
+            h = _mix32(_mix32(np.uint32((i * n + j + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
+            rad = radius[h >> np.uint32(16)]
+            k = h & np.uint32(0xFFFF)
+            out[r, j, 0] = (pos[j, 0] - xi) + sigma * (rad * cos[k])
+            out[r, j, 1] = (pos[j, 1] - yi) + sigma * (rad * sin[k])
+
+
+@njit(**_JIT)
+def uniform_rows(n: np.int64, lo: np.int64, hi: np.int64, first: np.int64, out: np.ndarray) -> None:
+    """out (R, N) float32 <- tasks/pairs.py ``counter_uniform`` of counters i N + j, receivers first..first+R-1."""
+    for r in range(out.shape[0]):
+        i = first + r
+        for j in range(n):
+            h = _mix32(_mix32(np.uint32((i * n + j + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
+            out[r, j] = (np.float32((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + np.float32(0.5)) \
+                * np.float32(1.0 / (1 << 24))
