@@ -71,3 +71,12 @@ def test_the_checker_sees_an_upward_import(tmp_path):
             assert imports(fake) and imports(fake)[0][1] == "stages"
         finally:
             fake.unlink()
+
+
+def test_pyproject_lists_every_package():
+    """A wheel carries only the packages pyproject.toml names: a new sub-package left out installs broken."""
+    import tomllib
+
+    listed = set(tomllib.loads((PKG.parent / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {".".join(("neurosym_cli",) + p.parent.relative_to(PKG).parts) for p in PKG.rglob("__init__.py")}
+    assert found - listed == set(), "add these to [tool.setuptools] packages"
