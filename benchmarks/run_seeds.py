@@ -14,7 +14,12 @@ When it ends, the small result file ``docs/results/seeds/<task>-seed<S>.json`` i
 directory: each baseline's evaluation (summary and per-evaluation-seed rows), the pick and the selection's table,
 the programs, the stage times and the machine. A task-seed whose result file exists is skipped; an interrupted
 one resumes (every stage of the pipeline resumes from its checkpoints). Run directories are not kept between
-sessions; the result files are what docs/results.md and `neurosym report` over seeds read.
+sessions, and one task-seed at the paper budget takes longer than a session on a busy 2-core machine, so the small
+resumable artifacts of an unfinished task-seed (the oracle's checkpoint and history, each searched program with its
+summary, select's validations, retrained models, evaluations; no datasets, traces or logs: under 1 MB) are stashed
+under ``<out>/partial/<task>-seed<S>/`` every ``--stash-every`` seconds and committed with ``--commit``; the next
+session's runner copies them back and goes on from there, and the stash is removed when the result file lands.
+``--stash-only`` does just the stashing, for runs already going.
 """
 
 from __future__ import annotations
@@ -23,8 +28,10 @@ import argparse
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -82,14 +89,60 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
     }
 
 
+STASH_MAX = 1 << 20
+"""bytes: a stashed artifact is at most this big (datasets are remade from the oracle; traces and logs are not needed
+to resume)"""
+SKIP = ("logs", ".lock", "trace.csv")
+
+
+def stash_dir(out: Path, task: str, seed: int) -> Path:
+    return out / "partial" / f"{task}-seed{seed}"
+
+
+def stash(exp: Path, dest: Path) -> int:
+    """Copy the small resumable artifacts of a run directory to ``dest`` (atomically per file, only what changed);
+    the number of files copied."""
+    n = 0
+    if not exp.is_dir():
+        return 0
+    for f in sorted(exp.rglob("*")):
+        rel = f.relative_to(exp)
+        if not f.is_file() or any(p in SKIP for p in rel.parts) or f.name.startswith("dataset") \
+                or f.suffix == ".tmp" or f.stat().st_size > STASH_MAX:
+            continue
+        to = dest / rel
+        data = f.read_bytes()
+        if to.exists() and to.read_bytes() == data:
+            continue
+        to.parent.mkdir(parents=True, exist_ok=True)
+        tmp = to.with_name(to.name + ".tmp")
+        tmp.write_bytes(data)
+        tmp.replace(to)
+        n += 1
+    return n
+
+
+def restore(src: Path, exp: Path) -> int:
+    """Copy a stash back into a run directory, keeping any file the run directory already has; files copied."""
+    n = 0
+    for f in sorted(src.rglob("*")) if src.is_dir() else []:
+        to = exp / f.relative_to(src)
+        if f.is_file() and not to.exists():
+            to.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(f, to)
+            n += 1
+    return n
+
+
 def git_commit(path: Path, message: str) -> None:
+    cwd = next(p for p in path.parents if p.exists())  # git rm takes emptied folders with it
     for attempt in range(20):  # another process may hold the index lock for a moment
-        r = subprocess.run(["git", "commit", "-q", "-m", message, "--", str(path)], cwd=path.parent, capture_output=True,
+        if path.exists():  # new files of a stash, or the result file; a removed stash is staged by git rm already
+            subprocess.run(["git", "add", "--", str(path)], cwd=cwd, capture_output=True, check=False)
+        r = subprocess.run(["git", "commit", "-q", "-m", message, "--", str(path)], cwd=cwd, capture_output=True,
                            text=True)
         if r.returncode == 0 or "nothing" in r.stdout + r.stderr:
             return
-        if "index.lock" not in r.stderr:
-            subprocess.run(["git", "add", "--", str(path)], cwd=path.parent, check=False)
         time.sleep(3)
     print(f"could not commit {path}", file=sys.stderr)
 
@@ -104,8 +157,18 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "seeds"), help="where result files go")
     ap.add_argument("--commit", action="store_true", help="git-commit each result file as it is written")
     ap.add_argument("--extra", nargs="*", default=[], help="more overrides for every pipeline (tiny rehearsals)")
+    ap.add_argument("--stash-every", type=float, default=600.0, help="seconds between stashes of an unfinished "
+                    "task-seed's resumable artifacts (0 = never)")
+    ap.add_argument("--stash-only", action="store_true", help="only stash (and commit) the given task-seeds' run "
+                    "directories every --stash-every seconds, until interrupted")
     args = ap.parse_args()
     out, runs = Path(args.out), Path(args.runs)
+    if args.stash_only:
+        while True:
+            for seed in args.seeds:
+                for task in args.tasks:
+                    keep_stash(out, runs, task, seed, args)
+            time.sleep(args.stash_every)
     out.mkdir(parents=True, exist_ok=True)
     logs = runs / "logs" / "seeds"
     logs.mkdir(parents=True, exist_ok=True)
@@ -121,6 +184,15 @@ def main() -> None:
             cmds = [[neurosym(), "train", *common],
                     [neurosym(), "select", *common, f"select.jobs={args.jobs}", *args.extra],
                     [neurosym(), "pipeline", *common, "selected=true"]]
+            exp = runs / task / args.budget / f"seed{seed}"
+            back = restore(stash_dir(out, task, seed), exp)
+            if back:
+                print(f"{task} seed {seed}: {back} stashed artifacts restored from {stash_dir(out, task, seed)}",
+                      flush=True)
+            stop = threading.Event()
+            keeper = threading.Thread(target=_keep, args=(stop, out, runs, task, seed, args), daemon=True)
+            if args.stash_every > 0:
+                keeper.start()
             t0 = time.time()
             rc = 0
             with open(logs / f"{task}-seed{seed}.log", "a") as log:
@@ -130,10 +202,11 @@ def main() -> None:
                     rc = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT).returncode
                     if rc:
                         break
+            stop.set()
             if rc != 0:
+                keep_stash(out, runs, task, seed, args)
                 print(f"{task} seed {seed}: exit {rc}; see {logs / (task + f'-seed{seed}.log')}", flush=True)
                 continue
-            exp = runs / task / args.budget / f"seed{seed}"
             res = collect(exp, task, seed, args.budget, time.time() - t0)
             tmp = dest.with_suffix(".tmp")
             tmp.write_text(json.dumps(res, indent=1, sort_keys=True) + "\n")
@@ -143,6 +216,30 @@ def main() -> None:
             if args.commit:
                 git_commit(dest, f"docs/results/seeds: {task} training seed {seed} ({args.budget} budget, "
                                  f"pinned kernels)")
+            part = stash_dir(out, task, seed)
+            if part.exists():
+                if args.commit:
+                    subprocess.run(["git", "rm", "-r", "-q", "--", str(part)], cwd=out, check=False)
+                    git_commit(part, f"docs/results/seeds: {task} training seed {seed} done; its stash removed")
+                shutil.rmtree(part, ignore_errors=True)
+
+
+def keep_stash(out: Path, runs: Path, task: str, seed: int, args) -> None:
+    """Stash one task-seed's run directory (unless its result file exists) and commit what changed."""
+    if result_file(out, task, seed).exists():
+        return
+    part = stash_dir(out, task, seed)
+    n = stash(runs / task / args.budget / f"seed{seed}", part)
+    if n:
+        print(f"{time.strftime('%H:%M:%S')} {task} seed {seed}: {n} artifacts stashed in {part}", flush=True)
+        if args.commit:
+            git_commit(part, f"docs/results/seeds: stash of unfinished {task} training seed {seed} "
+                             f"({args.budget} budget)")
+
+
+def _keep(stop: threading.Event, out: Path, runs: Path, task: str, seed: int, args) -> None:
+    while not stop.wait(args.stash_every):
+        keep_stash(out, runs, task, seed, args)
 
 
 if __name__ == "__main__":
