@@ -96,8 +96,9 @@ def choices(group: str, args: list[str] | None = None) -> list[str]:
     return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
 
 
-def check_choices(args: list[str]) -> str | None:
-    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None.
+def check_choices(args: list[str], sources: dict[str, str] | None = None) -> str | None:
+    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None; ``sources``:
+    where a defaulted group's value came from (defaults.py), named in its error.
 
     Hydra would say the same over a dozen lines; this names the valid choices and stays cheap (no Hydra import).
     """
@@ -110,7 +111,13 @@ def check_choices(args: list[str]) -> str | None:
             return None
         for v in value.split(","):  # sweeps: task=a,b
             if v not in known and not v.startswith(("glob(", "choice(", "range(")):
-                return f"unknown {key} {v!r}; choose one of: {', '.join(known)}"
+                where = f" (the default set by {sources[key]})" if key in (sources or {}) else ""
+                import difflib
+
+                near = difflib.get_close_matches(v, known, n=1, cutoff=0.6)
+                hint = f"; did you mean {key}={near[0]}? (choices: {', '.join(known)})" if near else \
+                    f"; choose one of: {', '.join(known)}"
+                return f"unknown {key} {v!r}{where}{hint}"
     return None
 
 
@@ -341,12 +348,19 @@ def _main() -> None:
         raise SystemExit(2)
     if cmd == "export":  # `neurosym export --check`: Hydra has no flags of its own for a verb, so it is an override
         rest = ["export.check=true" if a == "--check" else a for a in rest]
+    from neurosym_cli import defaults
     from neurosym_cli.errors import UserError
     from neurosym_cli.overrides import check
     from neurosym_cli.tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
 
+    try:  # task= and budget= from NEUROSYM_TASK / NEUROSYM_BUDGET or ./neurosym.yaml when the line names none
+        rest, sources = defaults.apply(rest)
+    except defaults.DefaultsError as e:
+        print(f"neurosym {cmd}: error: {e}", file=sys.stderr)
+        raise SystemExit(2) from None
+    os.environ[defaults.SOURCES_ENV] = defaults.describe(sources)  # the job's first log line names them
     add_import_paths(import_paths(rest))  # a user's task module, beside their config directory or in the cwd
-    bad, schemas = check_choices(rest) or check_launcher(rest), []
+    bad, schemas = check_choices(rest, sources) or check_launcher(rest), []
     if not bad:
         try:  # the tasks' own schemas: their keys are known to the check (and a class that does not import is one line)
             schemas = task_schemas(rest, COMMANDS[cmd][0])

@@ -81,6 +81,16 @@ def typed_config(cfg: DictConfig) -> RunConfig:
         raise UserError(str(e).splitlines()[0]) from None
 
 
+def run_header(name: str, cfg: RunConfig, sources: dict[str, str]) -> str:
+    """A command's first log line: the task, budget and seed in effect (and where a persistent default came from,
+    ``defaults.py``), and the run directory."""
+    def where(key: str) -> str:
+        return f" (from {sources[key]})" if key in sources else ""
+
+    return (f"neurosym {name.replace('_', '-')}: task={cfg.task.name}{where('task')} budget={cfg.budget.name}"
+            f"{where('budget')} seed={cfg.seed} -> {cfg.exp_dir}")
+
+
 def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
     """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback.
 
@@ -110,6 +120,10 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
 
         warn_once(typed.cpu_kernels)  # torch is loaded by now: one line if the config asks for other kernels
         info = RunInfo(sweep, hc.runtime.output_dir)
+        from ..defaults import sources_in_effect
+        from ..utils.console import log
+
+        log.info(run_header(name, typed, sources_in_effect()))
         from ..utils.io import confine
 
         # the runs root, the output directories a user named, and Hydra's own (job_result.json; a read-only
