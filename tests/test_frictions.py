@@ -6,6 +6,8 @@ import os
 import shlex
 import subprocess
 
+import pytest
+
 from conftest import neurosym_cmd
 
 
@@ -41,3 +43,47 @@ def test_task_and_budget_defaults_from_environment_and_project_file(tmp_path):
     one_line(run(["train"], tmp_path, check=False), "neurosym.yaml: unknown key 'budgett'; it may set task and budget")
     (tmp_path / ".neurosym.yaml").write_text("task: random-grid\n")
     one_line(run(["train"], tmp_path, check=False), "hold neurosym defaults; keep one")
+
+
+# ------------------------------------------------------------------------------------ hints run as printed
+def hints(p) -> list[list[str]]:
+    """Every `neurosym ...` command a run printed (stdout and stderr; rich wraps long lines at spaces)."""
+    import re
+
+    text = " ".join((p.stdout + "\n" + p.stderr).split())
+    return [shlex.split(c)[1:] for c in re.findall(r"`(neurosym [^`]+)`", text) if "..." not in c]
+
+
+def run_hint(args, cwd):
+    """A printed command, run as printed from another directory, no runs root or defaults in the environment."""
+    env = {k: v for k, v in os.environ.items() if k not in ("NEUROSYM_RUNS", "NEUROSYM_TASK", "NEUROSYM_BUDGET")}
+    p = subprocess.run([*neurosym_cmd(), *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, f"hint `neurosym {shlex.join(args)}` failed:\n{p.stdout}\n{p.stderr}"
+    return p
+
+
+@pytest.mark.slow
+def test_every_printed_hint_runs_as_printed(tmp_path):
+    runs, elsewhere = tmp_path / "my runs", tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    common = ["task=two-groups-cross", "budget=tiny", f"runs_root={runs}"]
+    p = run(["eval", "baseline=hard-attn", *common], tmp_path, check=False)
+    (train,) = hints(p)
+    assert train[0] == "train" and f"runs_root={runs}" in train
+    run_hint(train, elsewhere)
+    run(["eval", "baseline=hard-attn", *common], tmp_path)
+    p = run(["select", *common, "select.lam=[0.5]", "select.rules=[1]", "select.features=[v1]",
+             "select.finalists=1", "budget.val_seeds=2", "select.jobs=1"], tmp_path)
+    closing = hints(p)
+    assert [h[0] for h in closing] == ["eval", "pipeline"] and all("selected=true" in h for h in closing)
+    assert "budget=tiny" in closing[0]
+    for h in closing:
+        run_hint(h, elsewhere)
+    p = run(["stress", "task=random-grid", "budget=tiny", f"runs_root={runs}"], tmp_path, check=False)
+    pipeline = hints(p)[-1]  # the closing line's: the warnings before it name each missing model's command
+    assert pipeline[0] == "pipeline" and "stress" in p.stderr.strip().splitlines()[-1]
+    p = run(["report", f"report_dir={runs / 'random-grid/tiny'}"], tmp_path, check=False)
+    (pipeline,) = hints(p)  # the same pipeline, for every seed's directory of the report
+    assert pipeline[:3] == ["pipeline", "task=random-grid", "budget=tiny"] and f"runs_root={runs}" in pipeline
+    run_hint(pipeline, elsewhere)
+    run(["report", f"report_dir={runs / 'random-grid/tiny'}", "report.reps=100", "plots=false"], tmp_path)

@@ -87,6 +87,9 @@ def run_header(name: str, cfg: RunConfig, sources: dict[str, str]) -> str:
     def where(key: str) -> str:
         return f" (from {sources[key]})" if key in sources else ""
 
+    read = cfg.report_dir or cfg.report.seed_files  # report of another directory: the task and budget play no part
+    if read:
+        return f"neurosym {name.replace('_', '-')}: {read}"
     return (f"neurosym {name.replace('_', '-')}: task={cfg.task.name}{where('task')} budget={cfg.budget.name}"
             f"{where('budget')} seed={cfg.seed} -> {cfg.exp_dir}")
 

@@ -208,8 +208,7 @@ def report(cfg: RunConfig) -> dict:
         root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.exp_dir).parent  # <runs_root>/<task>/<budget>
         runs = seeds.from_runs_root(root)
         if not runs:
-            raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
-                                f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
+            raise ArtifactError(f"no evaluations under {root}; {_what_makes(cfg, root)}")
         task = runs[0].task or cfg.task.name
         by_task = {task: runs}
         out = root
@@ -248,6 +247,35 @@ def report(cfg: RunConfig) -> dict:
         if figures:  # drawn per training seed by the pipeline or `neurosym figures`
             console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
     return {"report": str(out / "report.json")}
+
+
+def _what_makes(cfg: RunConfig, root: Path) -> str:
+    """What to run when ``root`` holds no evaluations: the pipeline of the (task, budget[, seed]) that ``root``
+    names (report_dir=<runs root>/<task>[-fail<p>]/<budget>[/seed<k>], any runs root), else where report_dir must
+    point."""
+    import os
+    import re
+    import shlex
+    from importlib.resources import files
+
+    from ..baselines import run_args
+    from ..tasks.registry import task_choices
+
+    if not cfg.report_dir:
+        return f"run `neurosym pipeline {run_args(cfg)}` (or `neurosym eval ...`) first"
+    path = root.absolute()
+    seed = re.fullmatch(r"seed(\d+)", path.name)
+    run = path.parent if seed else path  # <runs root>/<task>/<budget>
+    task, fail = re.fullmatch(r"(.+?)(?:-fail([0-9.e-]+))?", run.parent.name or "-").groups()
+    if task in task_choices() and (files("neurosym_cli.conf") / "budget" / f"{run.name}.yaml").is_file():
+        runs_root = run.parent.parent
+        same = runs_root.resolve() == Path(os.environ.get("NEUROSYM_RUNS", "outputs")).resolve()
+        line = (f"neurosym pipeline task={task} budget={run.name}" + (f" seed={seed.group(1)}" if seed else "")
+                + (f" task.link_failure={fail}" if fail else "")
+                + ("" if same else " " + shlex.quote(f"runs_root={runs_root}")))
+        return f"run `{line}` (or `neurosym eval ...`) first"
+    return ("report_dir= names a directory of run directories (<runs_root>/<task>/<budget>, holding seed<k>/eval/), "
+            "or one seed<k> directory of it; `neurosym pipeline` writes their evaluations")
 
 
 def _rows_for_figures(s) -> Rows:

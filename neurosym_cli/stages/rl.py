@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__, paths
+from ..baselines import run_args
 from ..schemes import get
 from ..config import RunConfig
 from ..stats import mean_ci
@@ -105,7 +106,7 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "
-        f"(`neurosym report budget={cfg.budget.name} task={cfg.task.name}` lists them beside the others)")
+        f"(`neurosym report {run_args(cfg, seed=False)}` lists them beside the others)")
     return {"rl1": rl1["name"], "rl1 loss": test["rl1"]["cost"]["mean"], "rl2": rl2["name"],
             "rl2 loss": test["rl2"]["cost"]["mean"]}
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__, paths
+from ..baselines import run_args
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..stats import mean_ci  # the project's one Student-t interval
@@ -226,7 +227,7 @@ def selected_file(cfg: RunConfig) -> Path:
 
 
 def select_command(cfg: RunConfig) -> str:
-    return f"neurosym select task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}"
+    return f"neurosym select {run_args(cfg)}"
 
 
 def apply_selected(cfg: RunConfig) -> RunConfig:
@@ -299,8 +300,8 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         "jobs": jobs, "runtime": runtime(), "config": cfg.record()})
     print_selection(table, cfg, pick["name"], test)
     say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
-        f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "
-        f"`neurosym pipeline task={cfg.task.name} selected=true` use it")
+        f"`neurosym eval {run_args(cfg)} baseline=prog-retrained selected=true` and "
+        f"`neurosym pipeline {run_args(cfg)} selected=true` use it")
     return {"selected": pick["name"], "loss": test["prog-retrained"]["cost"]["mean"],
             "max in-deg": test["prog-retrained"]["max_in"]["mean"]}
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import paths
+from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import clock, log, say
@@ -81,7 +82,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
                      n, f, r["cost"]["mean"], r["max_in"]["mean"], clock(time.perf_counter() - t0))
     if not results:
         raise UserError("stress: no baseline of stress.baselines is trained here; "
-                        f"`neurosym pipeline task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` makes them")
+                        f"`neurosym pipeline {run_args(cfg)}` makes them")
     out = Path(cfg.exp_dir) / "stress"
     write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
                                      "seeds": cfg.stress.seeds, "results": results, "skipped": skipped,
