@@ -5,6 +5,7 @@ Imports nothing heavy, so `neurosym --help` answers in milliseconds (torch is im
 
 from __future__ import annotations
 
+import difflib
 import logging
 import os
 import re
@@ -112,8 +113,6 @@ def check_choices(args: list[str], sources: dict[str, str] | None = None) -> str
         for v in value.split(","):  # sweeps: task=a,b
             if v not in known and not v.startswith(("glob(", "choice(", "range(")):
                 where = f" (the default set by {sources[key]})" if key in (sources or {}) else ""
-                import difflib
-
                 near = difflib.get_close_matches(v, known, n=1, cutoff=0.6)
                 hint = f"; did you mean {key}={near[0]}? (choices: {', '.join(known)})" if near else \
                     f"; choose one of: {', '.join(known)}"
@@ -150,6 +149,13 @@ LAUNCHER_PLUGINS = {
 }
 """hydra/launcher choices -> (the plugin module they need, how to install it)"""
 
+def launchers() -> list[str]:
+    """The hydra/launcher choices: Hydra's basic one, this package's (conf/hydra/launcher/) and the plugins'."""
+    conf = _conf_dir()
+    own = [p.stem for p in (conf / "hydra" / "launcher").glob("*.yaml")] if conf is not None else []
+    return sorted({"basic", *own, *LAUNCHER_PLUGINS})
+
+
 _MODES = {"-m": "--multirun", "--multirun": "--multirun", "--cfg": "--cfg", "-c": "--cfg", "--info": "--info",
           "-i": "--info", "--run": "--run", "-r": "--run"}
 
@@ -164,6 +170,10 @@ def check_launcher(args: list[str]) -> str | None:
         return f"{' and '.join(modes)} cannot be combined; use one (print the config of a sweep job without -m)"
     for a in args:
         key, sep, value = a.partition("=")
+        if sep and key.lstrip("+") == "hydra/launcher" and value not in launchers():
+            near = difflib.get_close_matches(value, launchers(), n=1, cutoff=0.6)
+            return (f"unknown hydra/launcher {value!r}" + (f"; did you mean hydra/launcher={near[0]}?" if near else "")
+                    + f" (choices: {', '.join(launchers())})")
         if sep and key.lstrip("+") == "hydra/launcher" and value in LAUNCHER_PLUGINS:
             module, how = LAUNCHER_PLUGINS[value]
             try:
@@ -360,7 +370,13 @@ def _main() -> None:
         raise SystemExit(2) from None
     os.environ[defaults.SOURCES_ENV] = defaults.describe(sources)  # the job's first log line names them
     add_import_paths(import_paths(rest))  # a user's task module, beside their config directory or in the cwd
-    bad, schemas = check_choices(rest, sources) or check_launcher(rest), []
+    from neurosym_cli import argv as words
+    from neurosym_cli.overrides import known_keys
+
+    given, keys = _flag_values(rest), known_keys()
+    bad = (words.check_words(rest, given, keys, lambda group: choices(group, rest))
+           or words.check_grammar(rest, given, any(a in ("-m", "--multirun") for a in rest), keys))
+    bad, schemas = bad or check_choices(rest, sources) or check_launcher(rest), []
     if not bad:
         try:  # the tasks' own schemas: their keys are known to the check (and a class that does not import is one line)
             schemas = task_schemas(rest, COMMANDS[cmd][0])

@@ -87,3 +87,46 @@ def test_every_printed_hint_runs_as_printed(tmp_path):
     assert pipeline[:3] == ["pipeline", "task=random-grid", "budget=tiny"] and f"runs_root={runs}" in pipeline
     run_hint(pipeline, elsewhere)
     run(["report", f"report_dir={runs / 'random-grid/tiny'}", "report.reps=100", "plots=false"], tmp_path)
+
+
+# ------------------------------------------------------------------------------- did you mean, one line each
+@pytest.mark.parametrize("args,needle", [
+    (["random-grid"], "'random-grid' is not an override; did you mean task=random-grid?"),
+    (["tiny"], "did you mean budget=tiny?"),
+    (["random-grd"], "did you mean task=random-grid?"),
+    (["--task", "random-grid"], "--task random-grid: settings are key=value; did you mean task=random-grid?"),
+    (["--task=random-grd"], "did you mean task=random-grid?"),
+    (["--budget", "tiny"], "did you mean budget=tiny?"),
+    (["--seed", "3"], "did you mean seed=3?"),
+    (["rules", "3"], "did you mean rules=3?"),
+    (["--colour"], "unknown flag --colour; settings are key=value"),
+    (["task=random-grd"], "unknown task 'random-grd'; did you mean task=random-grid?"),
+    (["baseline=hard-atn"], "did you mean baseline=hard-attn?"),
+    (["rules=[1,2"], "cannot read '[1,2' at '['; a list is [a,b] with its brackets closed"),
+    (["select.rules=[1,x]"], "select.rules takes a list of integers"),
+    (["seed=null"], "seed cannot be null; it takes an integer"),
+    (["seed=[1,2]"], "seed takes one value (an integer), not a list"),
+    (["rules='\u00e9'"], "rules takes an integer"),
+    (["hydra/launcher=nope"], "unknown hydra/launcher 'nope' (choices: basic, joblib, slurm"),
+    (["hydra/launcher=jobib"], "did you mean hydra/launcher=joblib?"),
+    (["task=random-grid,random-cross"], "a comma makes a sweep (add -m)"),
+])
+def test_mistyped_arguments_are_one_line_with_the_fix(tmp_path, args, needle):
+    p = run(["train", *args], tmp_path, check=False)
+    one_line(p, needle)
+    assert not (tmp_path / "random-cross").exists()
+
+
+@pytest.mark.parametrize("name", ["a;b.txt", "a,b.txt", "a=b.txt", "it's.txt", "a[b].txt", "$(touch pwned).txt",
+                                  "caf\u00e9 \u00e0 deux.txt"])
+def test_program_file_names_hydra_cannot_read_get_the_quoting_that_works(tmp_path, name):
+    (tmp_path / name).write_text("argmax(map(-1.0*d, filter(d <= 2.0, l)))\n")
+    p = run(["show-program", "task=random-grid", f"program={name}"], tmp_path, check=False)
+    if p.returncode == 0:  # Hydra reads a few such names as they are
+        assert "argmax" in p.stdout
+        return
+    assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    typed = p.stderr.strip().rsplit(": ", 1)[1].rsplit("quote it ", 1)[-1]
+    (arg,) = shlex.split(typed)  # what the shell passes when the printed text is typed
+    p = run(["show-program", "task=random-grid", arg], tmp_path)
+    assert "argmax" in p.stdout and not (tmp_path / "pwned").exists()
