@@ -211,7 +211,8 @@ def swept_keys(args: list[str]) -> list[str]:
 
 
 READ_ONLY = ("show-program", "report")
-"""commands that only read a runs directory: they run on an archived (read-only) one, logging elsewhere"""
+"""commands that only read a runs directory: their logs go to the temp directory, never into a run directory (so
+they also run on an archived, read-only one)"""
 
 
 def _runs_root(args: list[str]) -> str:
@@ -257,11 +258,13 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
         probe = probe.parent
     if not probe.is_dir():
         return args, f"runs_root {root} lies under {probe}, which is a file, not a directory"
-    if _writable(probe):
-        return args, None
     if cmd not in READ_ONLY:
+        if _writable(probe):
+            return args, None
         return args, (f"cannot write to the runs directory {probe} (read-only); point runs_root=... (or "
                       f"NEUROSYM_RUNS) at a writable directory")
+    if any(a.startswith(("hydra.run.dir=", "hydra.sweep.dir=")) for a in args):
+        return args, None  # the user's own choice
     import tempfile
     import time
 

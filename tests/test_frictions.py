@@ -130,3 +130,21 @@ def test_program_file_names_hydra_cannot_read_get_the_quoting_that_works(tmp_pat
     (arg,) = shlex.split(typed)  # what the shell passes when the printed text is typed
     p = run(["show-program", "task=random-grid", arg], tmp_path)
     assert "argmax" in p.stdout and not (tmp_path / "pwned").exists()
+
+
+# ------------------------------------------------------------------------ no traces of failed or reading runs
+def test_failed_and_read_only_commands_leave_no_directories(tmp_path):
+    for args in (["synth", "task=random-grid", "budget=tiny"], ["eval", "task=random-grid", "budget=tiny"],
+                 ["train", "task=random-grid", "budget=tiny", "lam=-1"], ["show-program"], ["report"],
+                 ["report", f"report_dir={tmp_path / 'random-grid/tiny'}"]):
+        p = run(args, tmp_path, check=False)
+        assert p.returncode != 0 and "Traceback" not in p.stderr, p.stderr
+        assert sorted(tmp_path.rglob("*")) == [], (args, sorted(tmp_path.rglob("*")))
+    run(["train", "task=random-grid", "budget=tiny", "threads=1"], tmp_path)
+    exp = tmp_path / "random-grid/tiny/seed0"
+    assert len(list((exp / "logs").iterdir())) == 1  # a command that ran keeps its log
+    (tmp_path / "p.txt").write_text("random(filter(d <= 2.0, l))\n")
+    run(["show-program", "task=random-grid", "budget=tiny", "program=p.txt"], tmp_path)
+    p = run(["retrain", "task=random-grid", "budget=tiny"], tmp_path, check=False)  # no program: nothing written
+    assert p.returncode != 0 and len(list((exp / "logs").iterdir())) == 1 and not (exp / "synth").exists()
+    assert sorted(d.name for d in exp.iterdir()) == ["logs", "train"]

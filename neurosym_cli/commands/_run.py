@@ -81,6 +81,45 @@ def typed_config(cfg: DictConfig) -> RunConfig:
         raise UserError(str(e).splitlines()[0]) from None
 
 
+def _wrote_since(exp_dir: Path, logs: Path, started: float) -> bool:
+    """Whether a file under ``exp_dir`` (its log directories aside) changed since ``started`` (time.time())."""
+    import os
+
+    for top, dirs, files in os.walk(exp_dir):
+        dirs[:] = [d for d in dirs if Path(top, d) != logs.parent]
+        for f in files:
+            try:
+                if os.stat(Path(top, f)).st_mtime >= started:
+                    return True
+            except OSError:
+                continue
+    return False
+
+
+def _drop_log_dir(logs: Path, cfg: DictConfig, started: float) -> None:
+    """A command that stopped on bad input before writing anything did nothing worth a record: its Hydra log
+    directory goes, and with it the directories Hydra made for it that are empty now
+    (``<task>/<budget>/seed<S>/logs``), up to the runs root. Its one-line error is the whole story. The logs of a
+    command that wrote something before it stopped are kept."""
+    import shutil
+
+    from ..errors import lies_under
+
+    root = Path(str(cfg.get("runs_root", "") or "")).expanduser().absolute()
+    if not str(cfg.get("runs_root", "")) or not lies_under(logs, root) or logs.absolute() == root:
+        return  # logs the user sent elsewhere (hydra.run.dir=...) are theirs
+    if _wrote_since(Path(str(cfg.get("exp_dir", logs.parent.parent))), logs, started):
+        return
+    shutil.rmtree(logs, ignore_errors=True)
+    for d in logs.absolute().parents:
+        if d == root or not lies_under(d, root):
+            break
+        try:
+            d.rmdir()  # only when empty
+        except OSError:
+            break
+
+
 def run_header(name: str, cfg: RunConfig, sources: dict[str, str]) -> str:
     """A command's first log line: the task, budget and seed in effect (and where a persistent default came from,
     ``defaults.py``), and the run directory."""
@@ -100,6 +139,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     Inside a multirun a job's bad input fails that job alone: its line is printed, its outcome written to
     job_result.json in its Hydra directory, and the other jobs run; the sweep's summary (``sweep.py``) lists
     every job and exits non-zero when one failed."""
+    import time
+
+    started = time.time() - 1.0  # file times can lag the clock by a tick
     hc = HydraConfig.get()
     sweep = hc.mode == RunMode.MULTIRUN
     _plain_logs_off_terminal()
@@ -144,6 +186,7 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
         result = fn(typed, info)
     except UserError as e:
         if not sweep:
+            _drop_log_dir(Path(hc.runtime.output_dir), cfg, started)
             _error(name, str(e))
         from ..utils.console import say
         from ..utils.io import write_json
