@@ -15,8 +15,8 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
                                                  run without neurosym
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
-    layer 7: cli argv api                        the console script and its reading of the command line; the
-                                                 Python API (neurosym.api)
+    layer 7: cli argv helptext api               the console script, its reading of the command line and its
+                                                 help per command; the Python API (neurosym.api)
 """
 
 __version__ = "0.1.0"

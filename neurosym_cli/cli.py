@@ -272,11 +272,9 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     return [*args, f"hydra.run.dir={logs}", f"hydra.sweep.dir={logs}"], None
 
 
-def print_typed_config(cmd: str, args: list[str]) -> None:
-    """`--cfg job`: the typed config the run would use, every field of the task's own schema with its value and no
-    interpolation left (``rules: 5``, not ``rules: ${task.rules}``); bad input is one line."""
-    from omegaconf import OmegaConf
-
+def _typed(cmd: str, args: list[str]):
+    """The typed config ``neurosym <cmd> <args>`` would run with (flags and Hydra's own keys left out); bad input
+    is one line and exit 2."""
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.errors import UserError
     from neurosym_cli.tasks.registry import search_dirs
@@ -286,11 +284,25 @@ def print_typed_config(cmd: str, args: list[str]) -> None:
     overrides = [a for a in hoisted[n_flags:] if not a.startswith(("hydra.", "hydra/", "+hydra", "~hydra"))]
     dirs = search_dirs(args)
     try:
-        typed = compose_config(COMMANDS[cmd][0], overrides, str(dirs[0]) if dirs else None)
+        return compose_config(COMMANDS[cmd][0], overrides, str(dirs[0]) if dirs else None)
     except UserError as e:
         print(f"neurosym {cmd}: error: {e}", file=sys.stderr)
         raise SystemExit(2) from None
-    sys.stdout.write(OmegaConf.to_yaml(OmegaConf.structured(typed)))
+
+
+def print_typed_config(cmd: str, args: list[str]) -> None:
+    """`--cfg job`: the typed config the run would use, every field of the task's own schema with its value and no
+    interpolation left (``rules: 5``, not ``rules: ${task.rules}``); bad input is one line."""
+    from omegaconf import OmegaConf
+
+    sys.stdout.write(OmegaConf.to_yaml(OmegaConf.structured(_typed(cmd, args))))
+
+
+def print_help(cmd: str, args: list[str]) -> None:
+    """`neurosym <cmd> --help`: the groups, keys and sections the command reads, with their docstrings."""
+    from neurosym_cli.helptext import command_help
+
+    sys.stdout.write(command_help(cmd, _typed(cmd, args), lambda group: choices(group, args)))
 
 
 def _flag_values(args: list[str]) -> set[str]:
@@ -390,6 +402,9 @@ def _main() -> None:
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
+    if any(a in ("--help", "-h") for a in rest):  # Hydra's own: --hydra-help
+        print_help(cmd, [a for a in rest if a not in ("--help", "-h")])
+        return
     rest, bad = _log_dir(cmd, rest)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)

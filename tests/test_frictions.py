@@ -5,6 +5,7 @@ only read, help per command."""
 import os
 import shlex
 import subprocess
+import sys
 
 import pytest
 
@@ -148,3 +149,23 @@ def test_failed_and_read_only_commands_leave_no_directories(tmp_path):
     p = run(["retrain", "task=random-grid", "budget=tiny"], tmp_path, check=False)  # no program: nothing written
     assert p.returncode != 0 and len(list((exp / "logs").iterdir())) == 1 and not (exp / "synth").exists()
     assert sorted(d.name for d in exp.iterdir()) == ["logs", "train"]
+
+
+# ----------------------------------------------------------------------------------------- help per command
+def test_help_per_command_has_the_schema_docstrings_and_only_its_sections(tmp_path):
+    p = run(["train", "--help", "task=random-grid"], tmp_path)
+    out = p.stdout
+    assert "optim.lr=0.01" in out and "Adam learning rate at the start" in out  # value and docstring
+    assert "task (random-grid, GridConfig)" in out and "seed=0" in out and "training seed" in out
+    assert "budget    paper, quick*, tiny" in out and "baseline  tf-full*" in out
+    assert "select." not in out and "report." not in out and "render." not in out and "hydra" not in out
+    assert len(out.splitlines()) < 130 and not list(tmp_path.iterdir())
+    out = run(["report", "-h"], tmp_path).stdout
+    assert "report.reps=50000" in out and "bootstrap resamples" in out and "report_dir=''" in out
+    assert "optim." not in out and "task.horizon" not in out and "baseline " not in out
+    out = run(["select", "--help"], tmp_path).stdout
+    assert "select.lam=[0.3,0.5,0.7,1.0]" in out and "synth.coarse=4" in out  # the command's own defaults
+    code = ("import sys; sys.argv=['neurosym','synth','--help']; from neurosym_cli.cli import main; main(); "
+            "assert 'torch' not in sys.modules, 'torch imported'")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 0 and "synth.temperature=0.1" in p.stdout, p.stderr
