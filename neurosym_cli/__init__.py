@@ -3,9 +3,9 @@
 Packages are cut by concept. Import layers, lowest first: a module imports from its own layer and the layers
 below it, never from above (tests/test_layers.py reads this table and checks every import, lazy ones included):
 
-    layer 0: errors verb_config config baselines paths utils stats defaults  errors, schemas, what a baseline is
+    layer 0: errors verb_config config baselines paths utils stats defaults degrees  errors, schemas, what a baseline is
                                                  (its interface), artifact names, statistics, the console
-                                                 script's persistent task and budget
+                                                 script's persistent task and budget, the words for degrees
     layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode viz       checkpoints; one batched rollout; a recorded episode; pictures

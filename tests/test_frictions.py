@@ -169,3 +169,38 @@ def test_help_per_command_has_the_schema_docstrings_and_only_its_sections(tmp_pa
             "assert 'torch' not in sys.modules, 'torch imported'")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
     assert p.returncode == 0 and "synth.temperature=0.1" in p.stdout, p.stderr
+
+
+# ------------------------------------------------------------------- one word per degree, labels that differ
+def test_one_word_per_degree_with_a_legend_under_every_table(tmp_path):
+    from neurosym_cli.degrees import LEGEND
+
+    run(["train", "task=random-grid", "budget=tiny", "threads=1"], tmp_path)
+    p = run(["eval", "task=random-grid", "budget=tiny", "baseline=hard-attn", "plots=false"], tmp_path)
+    words = " ".join(p.stdout.replace("│", " ").replace("┃", " ").split())
+    assert "max in max out max in+out mean in+out collisions" in words and " ".join(LEGEND.split()) in words
+    assert "mean deg" not in words and "max deg" not in words and "in-deg " not in words
+    p = run(["synth", "task=random-grid", "budget=tiny", "threads=1", "progress=plain"], tmp_path)
+    assert "x max in+out" in p.stdout and "degree term" not in p.stdout
+    assert "max in+out: the program's max_i (in_i + out_i) on the synthesis dataset D" in p.stdout
+    p = run(["show-program", "task=random-grid", "budget=tiny"], tmp_path)
+    words = " ".join(p.stdout.replace("│", " ").split())
+    assert "x max in+out" in words and "max in+out ≤" in words and "x degree" not in words
+
+
+def test_labels_tell_configurations_apart_and_numbers_keep_their_decimals(tmp_path, caplog):
+    import logging
+
+    from neurosym_cli.commands.sweep import _cell
+    from neurosym_cli.plotting import short_labels
+    from neurosym_cli.stages.results import write_pareto
+
+    assert short_labels(["tf-full", "prog-k2-lam0.5-v1", "prog-k3-lam0.5-v1", "rl1", "rl2"]) == \
+        ["tf-full", "prog-k2", "prog-k3", "rl1", "rl2"]
+    assert short_labels(["prog-k2-lam0.3-v1", "prog-k2-lam0.5-v1"]) == ["prog-lam0.3", "prog-lam0.5"]
+    assert _cell(413.806) == "413.806" and _cell(1413.8) == "1413.800" and _cell(None) == "-" and _cell(3) == "3"
+    rows = [(label, {"max_degree": {"mean": x}, "cost": {"mean": y}})
+            for label, x, y in (("a", 5.0, 1.0), ("b", 1.0, 2.0), ("c", 6.0, 3.0))]
+    with caplog.at_level(logging.INFO, logger="neurosym"):
+        write_pareto(rows, tmp_path, "t", plot=False)
+    assert "non-dominated (loss, max in+out), lowest loss first: a (1.000, 5.000), b (2.000, 1.000)" in caplog.text

@@ -3,7 +3,7 @@ the only layer that sees Hydra; importing it imports nothing heavy."""
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "train": ("train", "train the transformer oracle (or a baseline's own model) by backprop through the dynamics"),
-    "eval": ("eval", "evaluate a baseline over seeds: loss, max in/out-degree, mean degree, collisions"),
+    "eval": ("eval", "evaluate a baseline over seeds: loss, max in, max out, max in+out, mean in+out, collisions"),
     "synth": ("synth", "synthesize a communication program by MCMC (paper sections 3.2, 3.4), or a tree (dt)"),
     "retrain": ("retrain", "fine-tune the oracle under a synthesized program or tree (paper section 3.5)"),
     "show-program": ("show_program", "print a synthesized program in the paper's notation, with its reading"),

@@ -49,15 +49,19 @@ def job_prefix(overrides: list[str], num: int) -> str:
     return " ".join(picked) if picked else f"job {num}"
 
 
-def _row(result: Any) -> dict[str, Any]:
-    """The numbers of a verb's result worth a column in a sweep's comparison table."""
+def _row(result: Any, objective: str = "paper") -> dict[str, Any]:
+    """The numbers of a verb's result worth a column in a sweep's comparison table (``objective``: the search's
+    synth.objective, which names a program's degree term)."""
+    from ..degrees import objective_term
+
     if not isinstance(result, dict):
         return {}
     if isinstance(result.get("cost"), dict):  # eval: the summary of every metric
-        return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in-deg", "max_in"),
-                                                     ("max out-deg", "max_out")) if isinstance(result.get(m), dict)}
-    keep = {k: v for k, v in result.items()
-            if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
+        return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in", "max_in"), ("max out", "max_out"),
+                                                     ("max in+out", "max_degree")) if isinstance(result.get(m), dict)}
+    names = {"loss": "loss", "objective": "objective", "l1": "l1", "degree": f"{objective_term(objective)} on D",
+             "frames": "frames"}
+    keep = {names[k]: v for k, v in result.items() if k in names and isinstance(v, (int, float))}
     for k in ("program", "tree", "checkpoint", "selected"):  # where the job's artifact is: the sweep table shows it
         if isinstance(result.get(k), str):
             keep["artifact"] = result[k]
@@ -199,5 +203,5 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     if sweep:
         from ..utils.io import write_json
 
-        write_json(record, {"ok": True, **stamp, "row": _row(result)})
+        write_json(record, {"ok": True, **stamp, "row": _row(result, typed.synth.objective)})
     return result

@@ -7,13 +7,14 @@ from pathlib import Path
 
 from .. import schemes
 from ..config import RunConfig
+from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
 
-COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
+COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
            ("collisions", "collisions")]
 """(metric, column title) of every results table"""
 
@@ -94,10 +95,13 @@ def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[
     write_csv(csv_path, [{"label": label, "max_degree": x, "loss": y, "non_dominated": int(k in front),
                           "ref_max_degree": ref[0], "ref_loss": ref[1], "dominated_area": area}
                          for k, (label, x, y) in enumerate(pts)])
-    png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + "\nloss against degree: the lower "
-                      "left is better", root / "pareto.png") if plot else None
-    log.info("non-dominated (loss, max degree): %s; dominated area %.4g up to %s",
-             ", ".join(pts[i][0] for i in front), area, tuple(round(v, 4) for v in ref))
+    png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + f"\nloss against {NAMES['max_degree']}: "
+                      "the lower left is better", root / "pareto.png") if plot else None
+    shown = sorted(front, key=lambda i: (pts[i][2], pts[i][1]))  # lowest loss first
+    log.info("non-dominated (loss, %s), lowest loss first: %s; dominated area %.4g up to the reference point "
+             "(loss %.4g, %s %.4g)", NAMES["max_degree"],
+             ", ".join(f"{pts[i][0]} ({pts[i][2]:.3f}, {pts[i][1]:.3f})" for i in shown), area, ref[1],
+             NAMES["max_degree"], ref[0])
     return csv_path, png
 
 
@@ -117,7 +121,7 @@ def write_figure(cfg: RunConfig) -> Path:
 
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
-    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS, err="ci95"))
+    console.print(metrics_table(title(cfg), collect(Path(cfg.exp_dir)), COLUMNS, err="ci95", caption=LEGEND))
     if cfg.plots:
         png = write_figure(cfg)
         console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
@@ -131,7 +135,7 @@ def across_table(s, digits: int = 3):
 
     n = len(s.seeds)
     t = Table(title=f"{s.task}: {n} training seed{'s' if n > 1 else ''} ({', '.join(map(str, s.seeds))})",
-              caption=seeds.caption(n), header_style="bold", caption_justify="left")
+              caption=f"{seeds.caption(n)}\n{LEGEND}", header_style="bold", caption_justify="left")
     t.add_column("baseline")
     t.add_column("n seeds", justify="right")
     for _, head in COLUMNS:

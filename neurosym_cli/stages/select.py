@@ -28,6 +28,7 @@ from .. import __version__, paths
 from ..baselines import run_args
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
+from ..degrees import LEGEND
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
@@ -282,7 +283,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
                                                                 "patience")},
               "program": str(paths.program_file(chosen)), "val_seeds": cfg.budget.val_seeds,
               "rule": "lowest mean validation loss; among programs whose paired 95% interval of the loss "
-                      "difference to it contains 0, the lowest max degree"}
+                      "difference to it contains 0, the lowest max in+out"}
     write_json(selected_file(cfg), record)  # the choice is fixed before any test episode is played
     t_select = time.perf_counter() - t0
     test = {}
@@ -337,7 +338,7 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                     f"(prog = oracle under the program; finalists retrained); ± = 95 % Student-t interval over the "
                     "validation seeds (Δ best: paired)", header_style="bold")
     for c in ("#", "lam", "K", "feat", "objective", "val loss ± CI", "Δ best ± CI", "max in", "max out",
-              "max deg", "retrained val loss", "ret. deg", ""):
+              "max in+out", "retrained val loss", "ret. max in+out", ""):
         t.add_column(c, justify="left" if c in ("feat", "") else "right")
     for r in rows:
         ret = "-" if r["retrained_val_loss"] is None else \
@@ -351,10 +352,11 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                   "[green]◀ picked[/]" if r["picked"] else ("finalist" if r["finalist"] else ""))
     console.print(t)
     console.print("* worse than the validation-best: its paired 95 % interval excludes 0. Among the finalists "
-                  "(similar to the best, lowest degree first), the pick is the lowest max degree whose retrained "
+                  "(similar to the best, lowest max in+out first), the pick is the lowest max in+out whose retrained "
                   "validation loss is similar to the best retrained one.")
+    console.print(LEGEND)
     pr = test["prog-retrained"]
     console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
                   f"one model) of {picked}: prog-retrained loss "
                   f"{pr['cost']['mean']:.3f} ± {pr['cost']['ci95']:.3f}, max in-degree {pr['max_in']['mean']:.2f}, "
-                  f"max degree {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")
+                  f"max in+out {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")

@@ -13,6 +13,7 @@ from .. import paths
 from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
+from ..degrees import LEGEND
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
@@ -109,7 +110,8 @@ def print_stress(results: list[dict], cfg: RunConfig) -> None:
             continue
         keys = sorted({r["agents_per_group"] if axis == "agents" else r["link_failure"] for r in rows})
         t = Table(title=f"zero-shot {head} ({cfg.task.name}, trained at {cfg.task.agents_per_group} per group, "
-                        f"{cfg.stress.seeds} test seeds): loss / max in-degree / max out-degree",
+                        f"{cfg.stress.seeds} test seeds): loss / max in / max out",
+                  caption=LEGEND, caption_justify="left",
                   header_style="bold")
         t.add_column("baseline")
         for k in keys:
