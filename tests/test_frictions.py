@@ -204,3 +204,17 @@ def test_labels_tell_configurations_apart_and_numbers_keep_their_decimals(tmp_pa
     with caplog.at_level(logging.INFO, logger="neurosym"):
         write_pareto(rows, tmp_path, "t", plot=False)
     assert "non-dominated (loss, max in+out), lowest loss first: a (1.000, 5.000), b (2.000, 1.000)" in caplog.text
+
+
+def test_the_results_page_shows_programs_simplified():
+    """docs/results.md (benchmarks/results_doc.py) shows each committed program through the data-free
+    simplification: no test on a distance below zero, no one-feature `or` that always holds."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs/results.md").read_text()
+    code = "\n".join(re.findall(r"```[a-z]*\n(.*?)```", page, flags=re.S))
+    assert "argmax(map(" in code and "Shown simplified" in page
+    assert not re.search(r"\b(d|gd|pd|g\d+d) <= -", code), "a test no distance passes"
+    for f, a, b in re.findall(r"(\w+) <= (-?[\d.]+) or \1 >= (-?[\d.]+)", code):
+        assert float(a) < float(b), f"`{f} <= {a} or {f} >= {b}` always holds"
