@@ -218,3 +218,27 @@ def test_the_results_page_shows_programs_simplified():
     assert not re.search(r"\b(d|gd|pd|g\d+d) <= -", code), "a test no distance passes"
     for f, a, b in re.findall(r"(\w+) <= (-?[\d.]+) or \1 >= (-?[\d.]+)", code):
         assert float(a) < float(b), f"`{f} <= {a} or {f} >= {b}` always holds"
+
+
+# -------------------------------------------------------------------------- select and a sweep's programs
+@pytest.mark.slow
+def test_select_names_the_command_that_reuses_a_sweeps_programs_and_that_command_does(tmp_path):
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.stages.select import grid, searched_otherwise
+
+    common = ["task=two-groups-cross", "budget=tiny", "threads=1"]
+    run(["train", *common], tmp_path)
+    run(["synth", "-m", "rules=1,2", "lam=0.5", *common], tmp_path)
+    synth = tmp_path / "two-groups-cross/tiny/seed0/synth"
+    swept = sorted(p.name for p in synth.iterdir() if p.is_dir())
+    assert swept == ["k1-lam0.5-v1", "k2-lam0.5-v1"]
+    cfg = compose_config("select", [f"runs_root={tmp_path}", *common, "select.lam=[0.5]", "select.rules=[1,2]",
+                                    "select.features=[v1]"])
+    line = searched_otherwise(cfg, grid(cfg))
+    assert line and "2 of the 2 grid programs exist searched with other settings (k1-lam0.5-v1, k2-lam0.5-v1)" in line
+    (hint,) = hints(subprocess.CompletedProcess([], 0, line, ""))
+    assert "synth.coarse=1" in hint and "synth.patience=0" in hint
+    p = run([*hint, "budget.val_seeds=2", "select.finalists=1", "select.jobs=1"], tmp_path)
+    assert sorted(p.name for p in synth.iterdir() if p.is_dir()) == swept  # nothing searched again
+    assert "already synthesized" in p.stdout
+    assert compose_config("select", [f"runs_root={tmp_path}", *hint[1:]]).synth.coarse == 1

@@ -89,6 +89,46 @@ def _val_file(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "select" / "val" / f"{paths.baseline_label(cfg)}.json"
 
 
+SEARCH_KEYS = ("objective", "own_scores", "simplify", "coarse", "patience")
+"""the synth settings that name a program (schemes/searched.py ``search_variants``) and that selected.json records"""
+
+
+def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
+    """A line for the grid points whose program is not on disk but one of the same (K, lambda, features) is, searched
+    with other settings (a sweep of `neurosym synth` at its own schedule): the command that makes select reuse
+    them; None when there are none. Select never swaps in a program of another search silently: the pick would
+    then depend on what happened to be on disk."""
+    import shlex
+
+    found: dict[str, list[str]] = {}
+    for p in points:
+        if (paths.synth_dir(p) / "program.txt").exists():
+            continue
+        stem = f"k{p.rules}-lam{p.lam:g}-{p.features}"
+        for d in sorted((Path(cfg.exp_dir) / "synth").glob(f"{stem}*/summary.json")):
+            if d.parent.name != stem and not d.parent.name.startswith(stem + "-"):
+                continue  # k1-lam0.5-v1 is not k1-lam0.5-v10
+            try:
+                synth = read_json(d)["config"]["synth"]
+                key = " ".join(f"synth.{k}={str(synth[k]).lower() if isinstance(synth[k], bool) else synth[k]}"
+                               for k in SEARCH_KEYS if synth[k] != getattr(cfg.synth, k))
+            except (UserError, KeyError, TypeError):
+                continue  # not a summary of this version: nothing to offer
+            found.setdefault(key, []).append(d.parent.name)
+            break
+    found.pop("", None)
+    if not found:
+        return None
+    overrides, tags = max(found.items(), key=lambda kv: len(kv[1]))
+    grid = [f"select.{k}=[{','.join(f'{x:g}' if isinstance(x, float) else str(x) for x in getattr(cfg.select, k))}]"
+            for k in ("lam", "rules", "features")]
+    line = f"neurosym select {run_args(cfg)} " + " ".join(shlex.quote(g) for g in grid) + f" {overrides}"
+    ours = " ".join(f"synth.{k}={getattr(cfg.synth, k)}" for k in ("coarse", "patience"))
+    return (f"{len(tags)} of the {len(points)} grid programs exist searched with other settings ({', '.join(tags[:3])}"
+            f"{', ...' if len(tags) > 3 else ''}); select searches them again on its own schedule ({ours}); "
+            f"`{line}` selects among those instead")
+
+
 def validate(cfg: RunConfig) -> dict[str, Any]:
     """Validation rows of ``cfg``'s baseline (prog, prog-retrained, rl): per validation seed the loss and the degree.
     Reused when the file exists for the same program text, model and seeds."""
@@ -260,6 +300,9 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     t0 = time.perf_counter()
     say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
         f"features {cfg.select.features}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
+    other = searched_otherwise(cfg, points)
+    if other:
+        log.warning(other)
     if jobs > 1 and not paths.dataset_file(points[0]).exists():
         from .synth import collect_dataset
 
@@ -279,8 +322,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     record = {"command": "select", "version": __version__, "task": cfg.task.name, "seed": cfg.seed,
               "budget": cfg.budget.name, "name": pick["name"], "rules": chosen.rules, "lam": chosen.lam,
               "features": chosen.features,
-              "synth": {k: getattr(chosen.synth, k) for k in ("objective", "own_scores", "simplify", "coarse",
-                                                                "patience")},
+              "synth": {k: getattr(chosen.synth, k) for k in SEARCH_KEYS},
               "program": str(paths.program_file(chosen)), "val_seeds": cfg.budget.val_seeds,
               "rule": "lowest mean validation loss; among programs whose paired 95% interval of the loss "
                       "difference to it contains 0, the lowest max in+out"}
