@@ -11,6 +11,7 @@ import os
 import re
 import sys
 
+from neurosym_cli.argv import check_launcher
 from neurosym_cli.commands import COMMANDS
 
 EXAMPLES = """examples:
@@ -138,50 +139,6 @@ def pin_kernels(args: list[str]) -> str | None:
     if mode == "native" and cpu.kept():
         print(f"neurosym: warning: cpu_kernels=native leaves {' '.join(cpu.kept())} of the environment in place",
               file=sys.stderr)
-    return None
-
-
-_SUBMITIT = ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install -e '.[cluster]' in the "
-             "neurosym checkout (or pip install hydra-submitit-launcher)")
-LAUNCHER_PLUGINS = {
-    "joblib": ("hydra_plugins.hydra_joblib_launcher", "hydra-joblib-launcher (a dependency of neurosym; reinstall it)"),
-    **{name: _SUBMITIT for name in ("submitit_local", "submitit_slurm", "slurm", "slurm_local")},
-}
-"""hydra/launcher choices -> (the plugin module they need, how to install it)"""
-
-def launchers() -> list[str]:
-    """The hydra/launcher choices: Hydra's basic one, this package's (conf/hydra/launcher/) and the plugins'."""
-    conf = _conf_dir()
-    own = [p.stem for p in (conf / "hydra" / "launcher").glob("*.yaml")] if conf is not None else []
-    return sorted({"basic", *own, *LAUNCHER_PLUGINS})
-
-
-_MODES = {"-m": "--multirun", "--multirun": "--multirun", "--cfg": "--cfg", "-c": "--cfg", "--info": "--info",
-          "-i": "--info", "--run": "--run", "-r": "--run"}
-
-
-def check_launcher(args: list[str]) -> str | None:
-    """A one-line error for a launcher whose plugin is not installed (Hydra only says "Could not find"), or for
-    two of Hydra's exclusive modes at once (-m with --cfg), else None."""
-    from importlib.util import find_spec
-
-    modes = sorted({_MODES[a] for a in args if a in _MODES})
-    if len(modes) > 1:
-        return f"{' and '.join(modes)} cannot be combined; use one (print the config of a sweep job without -m)"
-    for a in args:
-        key, sep, value = a.partition("=")
-        if sep and key.lstrip("+") == "hydra/launcher" and value not in launchers():
-            near = difflib.get_close_matches(value, launchers(), n=1, cutoff=0.6)
-            return (f"unknown hydra/launcher {value!r}" + (f"; did you mean hydra/launcher={near[0]}?" if near else "")
-                    + f" (choices: {', '.join(launchers())})")
-        if sep and key.lstrip("+") == "hydra/launcher" and value in LAUNCHER_PLUGINS:
-            module, how = LAUNCHER_PLUGINS[value]
-            try:
-                found = find_spec(module) is not None
-            except (ImportError, ValueError):
-                found = False
-            if not found:
-                return f"hydra/launcher={value} needs {how}"
     return None
 
 
