@@ -133,6 +133,8 @@ def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: 
             fix = f"; for the text itself quote it: {quoted}" if quoted else ""
             return f"{a}: Hydra's override grammar cannot read {value!r} at {_token(key, value)}{lists}{fix}"
         if o.is_sweep_override() and not multirun:
+            if "," not in value:
+                return f"{a}: {value} is a sweep; add -m to run one job per value"
             quoted = hydra_quoted(key.lstrip("+~"), value) if text else None
             return (f"{a}: a comma makes a sweep (add -m) or, in brackets, a list ({key}=[...])"
                     + (f"; for a value with a comma in it quote it: {quoted}" if quoted else ""))
