@@ -76,7 +76,7 @@ def plot_curves(data: dict, path: str) -> None:
     ax.set_title("training loss against wall time")
     ax.legend(fontsize=8)
     bx.set_xlabel("training rollouts")
-    bx.set_ylabel("max degree (in + out) of the gate's decisions")
+    bx.set_ylabel("max in+out of the gate's decisions")
     bx.set_title("rl: how much the agents talk while training")
     bx.legend(fontsize=8)
     fig.suptitle(f"{data['task']}, paper budget (train seed 0): the oracle's BPTT vs rl from scratch "

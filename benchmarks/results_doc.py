@@ -15,7 +15,7 @@ functions below (never evaluated as code):
     {{section V}}            the table, figure, programs, stage times and claim lines of variant V
     {{glance}}               the claims-at-a-glance tables of every variant
     {{mean V B M D}}         baseline B's mean of metric M in variant V, D digits (M: cost, max_in, max_out, ...)
-    {{half V B M D}}         half of it (mean degree / 2 = edges heard per agent and step)
+    {{half V B M D}}         half of it (mean in+out / 2 = edges heard per agent and step)
     {{per V B M1 M2 D}}      mean of M1 / mean of M2
     {{paired V A B D}}       paired loss difference A - B over the evaluation seeds with its 95 % t half-width
     {{gap V A B}}            relative loss difference A vs B, in percent
@@ -62,6 +62,29 @@ def vocab(task: str, features: str):
 
     cfg = compose_config("show_program", [f"task={task}", f"features={features}"])
     return make_task(cfg.task).features(features).vocab
+
+
+def shown(text: str, task: str, features: str, objective: str = "paper"):
+    """A committed program as the page shows it: simplified by the rewrites that hold whatever the data
+    (neurosym_cli/synth/simplify.py ``simplify_static``; the result file keeps the program as it was evaluated),
+    its header's degree term in the page's words. Returns (text, Program, the lines the page says under it)."""
+    from neurosym_cli.degrees import objective_term
+    from neurosym_cli.dsl import to_text
+    from neurosym_cli.dsl.ast import Program
+    from neurosym_cli.synth.simplify import simplify_static
+
+    lines = text.splitlines()
+    head = [ln.replace(" x degree ", f" x {objective_term(objective)} ") for ln in lines if ln.startswith("#")]
+    program = parse("\n".join(ln for ln in lines if not ln.startswith("#")))
+    rounds, notes = [], []
+    for r, rules in enumerate(program.rounds, start=1):
+        simple, changed = simplify_static(rules, vocab(task, features))
+        rounds.append(simple)
+        notes += [f"round {r}, {n}" if program.n_rounds > 1 else n for n in changed]
+    program = Program(tuple(rounds))
+    said = ([f"Shown simplified (whatever the data; rules numbered as evaluated: {'; '.join(notes)}); the result file keeps the program as "
+             "evaluated."] if notes else [])
+    return "\n".join(head + [to_text(program).rstrip()]), program, said
 
 
 def _has_program(metrics: dict) -> bool:
@@ -229,14 +252,14 @@ def rl(task: str, variants: dict[str, dict]) -> str:
            f"from {sorted({s['init'] for s in r['settings']})} ({len(r['settings'])} settings), each trained for "
            f"{r['settings'][0]['rollouts']} rollouts on the oracle of the {task} section; {r['val_seeds']} "
            f"validation seeds; {r['jobs']} setting(s) trained at a time.", "",
-           "| setting | cost weight | reward | val loss ± 95 % | max in | max out | max degree | rollouts/s | pick |",
+           "| setting | cost weight | reward | val loss ± 95 % | max in | max out | max in+out | rollouts/s | pick |",
            "|---|---|---|---|---|---|---|---|---|"]
     for s in sorted(r["settings"], key=lambda s: s["val_loss"]):
         out.append(f"| {s['name']} | {s['cost']:g} | {'to go' if s['shaped'] else 'episode'} | "
                    f"{s['val_loss']:.2f} ± {s['val_loss_ci']:.2f} | {s['max_in']:.2f} | {s['max_out']:.2f} | "
                    f"{s['max_degree']:.2f} | {s['rollouts_per_second']:.1f} | {s['pick']} |")
     out += ["", f"Test seeds ({v['seeds']}, the same episodes as every table of this page):", "",
-            "| baseline | loss | max in-degree | max out-degree | max degree |", "|---|---|---|---|---|"]
+            "| baseline | loss | max in | max out | max in+out |", "|---|---|---|---|---|"]
     rows = [b for b in ("tf-full", "hard-attn", "dist", "prog-retrained", "no-comm") if b in vs["baselines"]]
     for b in rows + ["rl1", "rl2"] + sorted(extra):
         name = f"prog-retrained ({which} program)" if b == "prog-retrained" else \
@@ -251,11 +274,11 @@ def rl(task: str, variants: dict[str, dict]) -> str:
     ok2 = d2[0] - d2[1] > 0
     dominated = [b for b in ("rl1", "rl2") if mean(vs, b) <= mean(vs, pr) and deg[b] <= deg[pr]]
     out += ["", "The paper's claims (appendix D):", "",
-            f"- rl1 (the lowest loss over the settings) has a much higher degree than prog-retrained: max degree "
+            f"- rl1 (the lowest loss over the settings) has a much higher degree than prog-retrained: max in+out "
             f"{deg['rl1']:.2f} vs {deg[pr]:.2f} (tf-full {deg['tf-full']:.2f}); its loss against prog-retrained: "
             f"{pm(d1)} (paired) -> {verdict(ok1)}",
             f"- rl2 (the lowest degree) has a much higher loss than prog-retrained: {mean(vs, 'rl2'):.2f} vs "
-            f"{mean(vs, pr):.2f} (paired {pm(d2)}), at max degree {deg['rl2']:.2f} -> {verdict(ok2)}",
+            f"{mean(vs, pr):.2f} (paired {pm(d2)}), at max in+out {deg['rl2']:.2f} -> {verdict(ok2)}",
             f"- the program does better than both: neither pick has both a loss and a degree at most "
             f"prog-retrained's -> {verdict(not dominated)}"
             + ("" if not dominated else f" ({', '.join(dominated)} does)")]
@@ -273,7 +296,7 @@ def rl(task: str, variants: dict[str, dict]) -> str:
                 f"({tr['rollouts']} rollouts in {tr['seconds_this_run'] / 60:.1f} min, {tr['rollouts_per_second']:.1f} "
                 f"rollouts/s, final training loss {tr['final_loss']:.2f} against the oracle's "
                 f"{t['final_loss']:.2f}); on the test seeds: loss {mean(vs, b):.2f} (against tf-full {pm(paired(vs, b, 'tf-full'))}, "
-                f"paired) at max degree {mean(vs, b, 'max_degree'):.2f}."]
+                f"paired) at max in+out {mean(vs, b, 'max_degree'):.2f}."]
     return "\n".join(out)
 
 
@@ -312,7 +335,7 @@ def noisy(task: str, clean: str) -> str:
            f"retraining and evaluation, for every baseline. The programs are the pick of `neurosym select` on this "
            f"task's oracle (K = {sel['rules']}, lambda = {sel['lam']:g}, {sel['features']}); {v['seeds']} test "
            "seeds; degrees count the messages delivered.", "",
-           "| baseline | loss | max in-degree | max out-degree | max degree |", "|---|---|---|---|---|"]
+           "| baseline | loss | max in | max out | max in+out |", "|---|---|---|---|---|"]
     for b in ORDER:
         if b in v["baselines"]:
             out.append(f"| {b} | {ms(v, b, 'cost')} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
@@ -320,17 +343,17 @@ def noisy(task: str, clean: str) -> str:
     first = choose(sel["programs"])
     out += ["", "The selection by K: the best program of each K on the validation seeds (prog, the oracle under "
             "it), over the lambdas and feature maps of the grid:", "",
-            "| K | best program | val loss ± 95 % | Δ to the best ± 95 % | max degree | similar to the best |",
+            "| K | best program | val loss ± 95 % | Δ to the best ± 95 % | max in+out | similar to the best |",
             "|---|---|---|---|---|---|"]
     for k in sorted({r["rules"] for r in first}):
         r = min((r for r in first if r["rules"] == k), key=lambda r: r["loss_mean"])
         out.append(f"| {k} | {r['name'].split('-coarse')[0]} | {r['loss_mean']:.2f} ± {r['loss_ci']:.2f} | "
                    f"{r['diff']:+.2f} ± {r['diff_ci']:.2f} | {r['degree']:.2f} | {'yes' if r['similar'] else 'no'} |")
     best = next(r for r in first if r["best"])
-    program = parse(sel["program"])
+    text, program, said = shown(sel["program"], sel["task"], sel["features"])
     kept = len(program.rounds[0])
     out += ["", f"The selected program (searched with K = {sel['rules']}; {kept} rules left after simplification "
-            "dropped those that never fire on D):", "", "```", sel["program"], "```", ""]
+            "dropped those that never fire on D):", "", "```", text, "```", "", *([*said, ""] if said else [])]
     for rules in program.rounds:
         out += [f"- rule {k}: {describe(rule, vocab(sel['task'], sel['features']))}"
                 for k, rule in enumerate(rules, start=1)]
@@ -347,7 +370,7 @@ def noisy(task: str, clean: str) -> str:
                 f"{vs_none('dist')}."]
     out += ["", "The paper's claims (appendix E):", "",
             f"- prog-retrained has a loss similar to tf-full (within 5 %) with a lower degree: {mean(v, pr):.2f} vs "
-            f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max degree {mean(v, pr, 'max_degree'):.2f} vs "
+            f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max in+out {mean(v, pr, 'max_degree'):.2f} vs "
             f"{mean(v, 'tf-full', 'max_degree'):.2f} -> {verdict(ok1)}",
             f"- the best policy has four rules, against two without failures: the pick was searched with K = "
             f"{sel['rules']} and keeps {kept} rules (the validation-best program K = {best['rules']}); on {clean} "
@@ -477,7 +500,7 @@ def vmas(task: str) -> str:
     out = [f"`{v['command']}` (training seed {v['training_seed']}; {v['seeds']} evaluation seeds of "
            f"{v['episodes_per_seed']} episodes, T = {v['horizon']}). Loss and degrees: mean ± 95 % Student-t "
            "interval over the evaluation seeds of this one trained model; the scenario's own metrics: means.", "",
-           "| baseline | loss | max in-degree | max out-degree | " + " | ".join(extra) + " |",
+           "| baseline | loss | max in | max out | " + " | ".join(extra) + " |",
            "|---|---:|---:|---:|" + "---:|" * len(extra)]
     for k in _vmas_order(b):
         sm = b[k]["summary"]
@@ -485,9 +508,11 @@ def vmas(task: str) -> str:
         out.append(f"| {b[k]['label']} | {ci('cost')} | {ci('max_in')} | {ci('max_out')} | "
                    + " | ".join(f"{sm[e]['mean']:.3f}" for e in extra) + " |")
     if (DOCS / "figures" / f"{name}.png").exists():
-        out += ["", f"![{task}: loss vs max degree](figures/{name}.png)"]
-    out += ["", "The synthesized program (`neurosym show-program` prints the same):", "", "```", v["program"], "```", ""]
-    for rules in parse(v["program"]).rounds:
+        out += ["", f"![{task}: loss vs max in+out](figures/{name}.png)"]
+    text, program, said = shown(v["program"], task, "v1")
+    out += ["", "The synthesized program (`neurosym show-program` prints it as evaluated):", "", "```", text, "```", "",
+            *([*said, ""] if said else [])]
+    for rules in program.rounds:
         out += [f"- rule {k}: {describe(rule, vocab(task, 'v1'))}" for k, rule in enumerate(rules, start=1)]
     labels = {b[k]["label"]: k for k in b}
     shots = [p for p in sorted((DOCS / "figures").glob(f"{name}-*-episode0.png"))
@@ -543,7 +568,7 @@ def vmas_claims(v: dict) -> list[str]:
     d = paired(v, "prog", pr)
     lines.append(f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.3f} vs {mean(v, pr):.3f} "
                  f"(paired difference {pm(d, 3)}) -> {verdict(d[0] - d[1] > 0)}")
-    for m, words, other in (("max_out", "max out-degree", "hard-attn"), ("max_degree", "max degree", "tf-full")):
+    for m, words, other in (("max_out", "max out", "hard-attn"), ("max_degree", "max in+out", "tf-full")):
         lines.append(f"prog-retrained {words} lower than {other}: {ms(v, pr, m)} vs "
                      f"{ms(v, other, m)} (mean ± std) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
     for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
@@ -568,7 +593,7 @@ def stress(task: str) -> str:
         key = "agents_per_group" if axis == "agents" else "link_failure"
         levels = sorted({r[key] for r in rows})
         names = {r[key]: (f"{r[key]} (N ≤ {r['max_agents']})" if axis == "agents" else f"{r[key]:g}") for r in rows}
-        out += [f"Loss / max in-degree / max out-degree by {head}, mean over {st['seeds']} test seeds:", "",
+        out += [f"Loss / max in / max out by {head}, mean over {st['seeds']} test seeds:", "",
                 "| baseline | " + " | ".join(names[k] for k in levels) + " |", "|---" * (len(levels) + 1) + "|"]
         for label in dict.fromkeys(r["label"] for r in rows):
             cells = []
@@ -612,8 +637,8 @@ def selection(task: str, variants: dict[str, dict]) -> str:
            f"{sec['search_and_validate'] / 60:.1f} min searching and validating the {len(sel['programs'])} programs, "
            f"{sec['finalists_and_test'] / 60:.1f} min retraining and validating the finalists and evaluating the "
            f"pick on the test seeds." + (f" {sec['note']}" if sec.get("note") else ""), "",
-           "| # | lam | K | feat | search objective | val loss (prog) | Δ to best ± 95 % | max deg | retrained val loss"
-           " | retrained max deg | |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+           "| # | lam | K | feat | search objective | val loss (prog) | Δ to best ± 95 % | max in+out | retrained val loss"
+           " | retrained max in+out | |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for rank, r in enumerate(sorted(first, key=lambda r: r["loss_mean"]), start=1):
         f = final.get(r["name"])
         mark = "**picked**" if f and f["picked"] else ("finalist" if f else "")
@@ -624,9 +649,9 @@ def selection(task: str, variants: dict[str, dict]) -> str:
                    + ("" if f is None else f"{f['degree']:.2f}") + f" | {mark} |")
     out += ["", "\\* worse than the validation-best: the paired 95 % interval of the difference excludes 0.", ""]
     out += [f"The pick: **K = {sel['rules']}, lambda = {sel['lam']:g}, features {sel['features']}** "
-            f"(task default: K = {v['rules']}, lambda = {v['lam']:g}, {v['features']}):", "", "```", sel["program"],
-            "```", ""]
-    program = parse(sel["program"])
+            f"(task default: K = {v['rules']}, lambda = {v['lam']:g}, {v['features']}):", ""]
+    text, program, said = shown(sel["program"], sel["task"], sel["features"])
+    out += ["```", text, "```", "", *([*said, ""] if said else [])]
     for r, rules in enumerate(program.rounds, start=1):
         head = f"round {r}, " if program.n_rounds > 1 else ""
         out += [f"- {head}rule {k}: {describe(rule, vocab(sel['task'], sel['features']))}"
@@ -635,7 +660,7 @@ def selection(task: str, variants: dict[str, dict]) -> str:
     vs = with_selected(v, sel)
     out += [f"Test seeds ({v['seeds']}, the same episodes as the table above), the pick against the default "
             "configuration's programs:", "",
-            "| baseline | loss | max in-degree | max out-degree | mean degree |", "|---|---|---|---|---|"]
+            "| baseline | loss | max in | max out | mean in+out |", "|---|---|---|---|---|"]
     for b in ("tf-full", "hard-attn", "dist", "prog", "prog-retrained", "no-comm"):
         if b in ("prog", "prog-retrained"):
             out.append(f"| {b} (default {v['baselines'][b]['label'].split(b + '-')[-1]}) | {ms(v, b, 'cost')} | "
@@ -654,12 +679,12 @@ def selection(task: str, variants: dict[str, dict]) -> str:
         change = "" if before.get(short) == ok else f" (with the default configuration: {verdict(before[short])})"
         out.append(f"- {long} -> {verdict(ok)}{change}")
     if (DOCS / "figures" / f"{task}-pareto-selected.png").exists():
-        out += ["", f"![{task}: loss against max degree, Pareto front](figures/{task}-pareto-selected.png)"]
+        out += ["", f"![{task}: loss against max in+out, Pareto front](figures/{task}-pareto-selected.png)"]
     return "\n".join(out)
 
 
 def draw_pareto(task: str) -> None:
-    """docs/figures/<task>-pareto-selected.png: loss vs max degree of every baseline and the selected program."""
+    """docs/figures/<task>-pareto-selected.png: loss vs max in+out of every baseline and the selected program."""
     from neurosym_cli.plotting import pareto_plot
     from neurosym_cli.utils.pareto import dominated_area, pareto_front
 
@@ -680,7 +705,7 @@ def draw_pareto(task: str) -> None:
     front = pareto_front(xy)
     ref = (1.05 * max(x for x, _ in xy), 1.05 * max(y for _, y in xy))
     pareto_plot(pts, front, ref, dominated_area([xy[i] for i in front], ref),
-                f"{task} (paper budget, train seed 0): test loss against max degree (lower left is better),\n"
+                f"{task} (paper budget, train seed 0): test loss against max in+out (lower left is better),\n"
                 "every baseline, the program chosen by `neurosym select`"
                 + (" and the rl picks of `neurosym rl`" if rl_file.exists() else ""),
                 DOCS / "figures" / f"{task}-pareto-selected.png")
@@ -804,11 +829,11 @@ def claims(task: str, v: dict) -> list[Claim]:
                      "prog-retrained close to tf-full (within 10 %)", g,
                      "% loss gap to tf-full"))
     dv = mean(v, pr, "max_degree") - mean(v, "tf-full", "max_degree")
-    out.append(Claim("prog-retrained has a smaller max degree than tf-full",
-                     f"prog-retrained has a smaller max degree than tf-full: {ms(v, pr, 'max_degree')} vs "
+    out.append(Claim("prog-retrained has a smaller max in+out than tf-full",
+                     f"prog-retrained has a smaller max in+out than tf-full: {ms(v, pr, 'max_degree')} vs "
                      f"{ms(v, 'tf-full', 'max_degree')}",
                      f"{mean(v, pr, 'max_degree'):.1f} vs {mean(v, 'tf-full', 'max_degree'):.0f}", dv < 0,
-                     "prog-retrained has a smaller max degree than tf-full", dv, "max degree difference to tf-full"))
+                     "prog-retrained has a smaller max in+out than tf-full", dv, "max in+out difference to tf-full"))
     return out
 
 
@@ -822,18 +847,18 @@ def title(name: str, v: dict) -> str:
 def section(name: str, v: dict) -> str:
     task = v["task"]
     out = [f"## {title(name, v)}", "", f"K = {v['rules']}, lambda = {v['lam']:g}, objective {v['objective']}, "
-           f"{v['seeds']} evaluation seeds; loss, max in-degree, max out-degree: mean ± std over the seeds.", "",
-           "| baseline | loss | max in-degree | max out-degree | mean degree |", "|---|---|---|---|---|"]
+           f"{v['seeds']} evaluation seeds; loss and degrees: mean ± std over the seeds.", "",
+           "| baseline | loss | max in | max out | mean in+out |", "|---|---|---|---|---|"]
     digits = 3 if task == "unlabeled-goals" else 2
     for b in sorted(v["baselines"], key=lambda b: ORDER.index(b) if b in ORDER else len(ORDER)):
         out.append(f"| {b} | {ms(v, b, 'cost', digits)} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
                    f"{ms(v, b, 'mean_degree')} |")
     if name == task and (DOCS / "figures" / f"{task}.png").exists():
-        out += ["", f"![{task}: loss vs max degree](figures/{task}.png)"]
+        out += ["", f"![{task}: loss vs max in-degree](figures/{task}.png)"]
     out += ["", "Synthesized programs, each rule with its reading (`neurosym show-program` prints the same):", ""]
-    for tag, text in sorted(v["programs"].items()):
-        out += [f"`{tag}`:", "", "```", text, "```", ""]
-        program = parse(text)
+    for tag, raw in sorted(v["programs"].items()):
+        text, program, said = shown(raw, v["task"], v["features"], v["objective"])
+        out += [f"`{tag}`:", "", "```", text, "```", "", *([*said, ""] if said else [])]
         for r, rules in enumerate(program.rounds, start=1):
             head = f"round {r}, " if program.n_rounds > 1 else ""
             out += [f"- {head}rule {k}: {describe(rule, vocab(v['task'], v['features']))}"
@@ -959,8 +984,8 @@ def _seed_table(task: str, runs: list) -> list[str]:
             return f"{m['mean']:.{digits}f} ± {m['eval_ci95']:.{digits}f}"
         return seeds.fmt_mean(m, digits)
 
-    out = [head, "", "| baseline | n seeds | loss | loss IQM [95 % bootstrap] | max in-degree | max out-degree | "
-           "max degree |", "|---|---|---|---|---|---|---|"]
+    out = [head, "", "| baseline | n seeds | loss | loss IQM [95 % bootstrap] | max in | max out | "
+           "max in+out |", "|---|---|---|---|---|---|---|"]
     for key, m in s.rows.items():
         out.append(f"| {key} | {m['cost']['n']} | {cell(m['cost'])} | {seeds.fmt_iqm(m['cost'], digits)} | "
                    f"{cell(m['max_in'])} | {cell(m['max_out'])} | {cell(m['max_degree'])} |")
@@ -1010,7 +1035,7 @@ def seeds_task(task: str, runs: list) -> str:
             cells.append(("yes, " if one.holds else "**no**: ") + one.cell)
         out.append(f"| {c['short']} | " + " | ".join(cells) + f" | {holds_cell(c)} | {c['across']} | {c['unit']} |")
     if (DOCS / "figures" / f"seeds-{task}.png").exists():
-        out += ["", f"![{task}: loss against max degree over training seeds, one marker per seed and the across-seed "
+        out += ["", f"![{task}: loss against max in+out over training seeds, one marker per seed and the across-seed "
                 f"mean ± 95 % t-interval](figures/seeds-{task}.png)"]
     return "\n".join(out)
 

@@ -3,8 +3,9 @@
 Packages are cut by concept. Import layers, lowest first: a module imports from its own layer and the layers
 below it, never from above (tests/test_layers.py reads this table and checks every import, lazy ones included):
 
-    layer 0: errors verb_config config baselines paths utils stats  errors, schemas, what a baseline is (its
-                                                 interface), artifact names, statistics
+    layer 0: errors verb_config config baselines paths utils stats defaults degrees  errors, schemas, what a baseline is
+                                                 (its interface), artifact names, statistics, the console
+                                                 script's persistent task and budget, the words for degrees
     layer 1: dsl tasks                           the program language; the task boundary and the paper's tasks
     layer 2: policy                              the transformer and the communication providers
     layer 3: artifacts rollout episode viz       checkpoints; one batched rollout; a recorded episode; pictures
@@ -14,7 +15,8 @@ below it, never from above (tests/test_layers.py reads this table and checks eve
                                                  run without neurosym
     layer 5: stages                              what each verb does to a run directory; the stage graph
     layer 6: commands                            the Hydra verbs (the only layer that sees Hydra)
-    layer 7: cli api                             the console script; the Python API (neurosym.api)
+    layer 7: cli argv helptext api               the console script, its reading of the command line and its
+                                                 help per command; the Python API (neurosym.api)
 """
 
 __version__ = "0.1.0"

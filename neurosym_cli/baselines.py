@@ -44,10 +44,27 @@ class Artifact:
     file: str  # program.txt (a program in the paper's notation) or tree.json (a decision tree per round)
 
 
+def runs_root_arg(cfg: "RunConfig") -> str:
+    """`` runs_root=...`` when ``cfg``'s runs root is not the one the environment gives a new command (NEUROSYM_RUNS,
+    else outputs), else "": a printed command must find the same run directory."""
+    import os
+    import shlex
+
+    same = str(cfg.runs_root) == os.environ.get("NEUROSYM_RUNS", "outputs")
+    return "" if same else " " + shlex.quote(f"runs_root={cfg.runs_root}")
+
+
+def run_args(cfg: "RunConfig", seed: bool = True) -> str:
+    """``task=... budget=... seed=...`` (and the runs root where needed) of ``cfg``: what every printed command
+    carries, so it runs as printed whatever defaults (defaults.py) the next shell has."""
+    return (f"task={cfg.task.name} budget={cfg.budget.name}" + (f" seed={cfg.seed}" if seed else "")
+            + runs_root_arg(cfg))
+
+
 def train_line(cfg: "RunConfig", baseline: str, extra: str = "") -> str:
     """`neurosym train` of ``baseline`` on ``cfg``'s task, budget and seed, then ``extra`` overrides."""
     return (f"neurosym train task={cfg.task.name} baseline={baseline} budget={cfg.budget.name} "
-            f"seed={cfg.seed}{extra}")
+            f"seed={cfg.seed}{runs_root_arg(cfg)}{extra}")
 
 
 @dataclass

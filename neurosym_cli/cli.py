@@ -5,11 +5,13 @@ Imports nothing heavy, so `neurosym --help` answers in milliseconds (torch is im
 
 from __future__ import annotations
 
+import difflib
 import logging
 import os
 import re
 import sys
 
+from neurosym_cli.argv import check_launcher
 from neurosym_cli.commands import COMMANDS
 
 EXAMPLES = """examples:
@@ -96,8 +98,9 @@ def choices(group: str, args: list[str] | None = None) -> list[str]:
     return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
 
 
-def check_choices(args: list[str]) -> str | None:
-    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None.
+def check_choices(args: list[str], sources: dict[str, str] | None = None) -> str | None:
+    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None; ``sources``:
+    where a defaulted group's value came from (defaults.py), named in its error.
 
     Hydra would say the same over a dozen lines; this names the valid choices and stays cheap (no Hydra import).
     """
@@ -110,7 +113,11 @@ def check_choices(args: list[str]) -> str | None:
             return None
         for v in value.split(","):  # sweeps: task=a,b
             if v not in known and not v.startswith(("glob(", "choice(", "range(")):
-                return f"unknown {key} {v!r}; choose one of: {', '.join(known)}"
+                where = f" (the default set by {sources[key]})" if key in (sources or {}) else ""
+                near = difflib.get_close_matches(v, known, n=1, cutoff=0.6)
+                hint = f"; did you mean {key}={near[0]}? (choices: {', '.join(known)})" if near else \
+                    f"; choose one of: {', '.join(known)}"
+                return f"unknown {key} {v!r}{where}{hint}"
     return None
 
 
@@ -132,39 +139,6 @@ def pin_kernels(args: list[str]) -> str | None:
     if mode == "native" and cpu.kept():
         print(f"neurosym: warning: cpu_kernels=native leaves {' '.join(cpu.kept())} of the environment in place",
               file=sys.stderr)
-    return None
-
-
-_SUBMITIT = ("hydra_plugins.hydra_submitit_launcher", "the cluster extra: pip install -e '.[cluster]' in the "
-             "neurosym checkout (or pip install hydra-submitit-launcher)")
-LAUNCHER_PLUGINS = {
-    "joblib": ("hydra_plugins.hydra_joblib_launcher", "hydra-joblib-launcher (a dependency of neurosym; reinstall it)"),
-    **{name: _SUBMITIT for name in ("submitit_local", "submitit_slurm", "slurm", "slurm_local")},
-}
-"""hydra/launcher choices -> (the plugin module they need, how to install it)"""
-
-_MODES = {"-m": "--multirun", "--multirun": "--multirun", "--cfg": "--cfg", "-c": "--cfg", "--info": "--info",
-          "-i": "--info", "--run": "--run", "-r": "--run"}
-
-
-def check_launcher(args: list[str]) -> str | None:
-    """A one-line error for a launcher whose plugin is not installed (Hydra only says "Could not find"), or for
-    two of Hydra's exclusive modes at once (-m with --cfg), else None."""
-    from importlib.util import find_spec
-
-    modes = sorted({_MODES[a] for a in args if a in _MODES})
-    if len(modes) > 1:
-        return f"{' and '.join(modes)} cannot be combined; use one (print the config of a sweep job without -m)"
-    for a in args:
-        key, sep, value = a.partition("=")
-        if sep and key.lstrip("+") == "hydra/launcher" and value in LAUNCHER_PLUGINS:
-            module, how = LAUNCHER_PLUGINS[value]
-            try:
-                found = find_spec(module) is not None
-            except (ImportError, ValueError):
-                found = False
-            if not found:
-                return f"hydra/launcher={value} needs {how}"
     return None
 
 
@@ -194,7 +168,8 @@ def swept_keys(args: list[str]) -> list[str]:
 
 
 READ_ONLY = ("show-program", "report")
-"""commands that only read a runs directory: they run on an archived (read-only) one, logging elsewhere"""
+"""commands that only read a runs directory: their logs go to the temp directory, never into a run directory (so
+they also run on an archived, read-only one)"""
 
 
 def _runs_root(args: list[str]) -> str:
@@ -240,11 +215,13 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
         probe = probe.parent
     if not probe.is_dir():
         return args, f"runs_root {root} lies under {probe}, which is a file, not a directory"
-    if _writable(probe):
-        return args, None
     if cmd not in READ_ONLY:
+        if _writable(probe):
+            return args, None
         return args, (f"cannot write to the runs directory {probe} (read-only); point runs_root=... (or "
                       f"NEUROSYM_RUNS) at a writable directory")
+    if any(a.startswith(("hydra.run.dir=", "hydra.sweep.dir=")) for a in args):
+        return args, None  # the user's own choice
     import tempfile
     import time
 
@@ -252,11 +229,9 @@ def _log_dir(cmd: str, args: list[str]) -> tuple[list[str], str | None]:
     return [*args, f"hydra.run.dir={logs}", f"hydra.sweep.dir={logs}"], None
 
 
-def print_typed_config(cmd: str, args: list[str]) -> None:
-    """`--cfg job`: the typed config the run would use, every field of the task's own schema with its value and no
-    interpolation left (``rules: 5``, not ``rules: ${task.rules}``); bad input is one line."""
-    from omegaconf import OmegaConf
-
+def _typed(cmd: str, args: list[str]):
+    """The typed config ``neurosym <cmd> <args>`` would run with (flags and Hydra's own keys left out); bad input
+    is one line and exit 2."""
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.errors import UserError
     from neurosym_cli.tasks.registry import search_dirs
@@ -266,11 +241,25 @@ def print_typed_config(cmd: str, args: list[str]) -> None:
     overrides = [a for a in hoisted[n_flags:] if not a.startswith(("hydra.", "hydra/", "+hydra", "~hydra"))]
     dirs = search_dirs(args)
     try:
-        typed = compose_config(COMMANDS[cmd][0], overrides, str(dirs[0]) if dirs else None)
+        return compose_config(COMMANDS[cmd][0], overrides, str(dirs[0]) if dirs else None)
     except UserError as e:
         print(f"neurosym {cmd}: error: {e}", file=sys.stderr)
         raise SystemExit(2) from None
-    sys.stdout.write(OmegaConf.to_yaml(OmegaConf.structured(typed)))
+
+
+def print_typed_config(cmd: str, args: list[str]) -> None:
+    """`--cfg job`: the typed config the run would use, every field of the task's own schema with its value and no
+    interpolation left (``rules: 5``, not ``rules: ${task.rules}``); bad input is one line."""
+    from omegaconf import OmegaConf
+
+    sys.stdout.write(OmegaConf.to_yaml(OmegaConf.structured(_typed(cmd, args))))
+
+
+def print_help(cmd: str, args: list[str]) -> None:
+    """`neurosym <cmd> --help`: the groups, keys and sections the command reads, with their docstrings."""
+    from neurosym_cli.helptext import command_help
+
+    sys.stdout.write(command_help(cmd, _typed(cmd, args), lambda group: choices(group, args)))
 
 
 def _flag_values(args: list[str]) -> set[str]:
@@ -341,12 +330,25 @@ def _main() -> None:
         raise SystemExit(2)
     if cmd == "export":  # `neurosym export --check`: Hydra has no flags of its own for a verb, so it is an override
         rest = ["export.check=true" if a == "--check" else a for a in rest]
+    from neurosym_cli import defaults
     from neurosym_cli.errors import UserError
     from neurosym_cli.overrides import check
     from neurosym_cli.tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
 
+    try:  # task= and budget= from NEUROSYM_TASK / NEUROSYM_BUDGET or ./neurosym.yaml when the line names none
+        rest, sources = defaults.apply(rest)
+    except defaults.DefaultsError as e:
+        print(f"neurosym {cmd}: error: {e}", file=sys.stderr)
+        raise SystemExit(2) from None
+    os.environ[defaults.SOURCES_ENV] = defaults.describe(sources)  # the job's first log line names them
     add_import_paths(import_paths(rest))  # a user's task module, beside their config directory or in the cwd
-    bad, schemas = check_choices(rest) or check_launcher(rest), []
+    from neurosym_cli import argv as words
+    from neurosym_cli.overrides import known_keys
+
+    given, keys = _flag_values(rest), known_keys()
+    bad = (words.check_words(rest, given, keys, lambda group: choices(group, rest))
+           or words.check_grammar(rest, given, any(a in ("-m", "--multirun") for a in rest), keys))
+    bad, schemas = bad or check_choices(rest, sources) or check_launcher(rest), []
     if not bad:
         try:  # the tasks' own schemas: their keys are known to the check (and a class that does not import is one line)
             schemas = task_schemas(rest, COMMANDS[cmd][0])
@@ -357,6 +359,9 @@ def _main() -> None:
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
         raise SystemExit(2)
+    if any(a in ("--help", "-h") for a in rest):  # Hydra's own: --hydra-help
+        print_help(cmd, [a for a in rest if a not in ("--help", "-h")])
+        return
     rest, bad = _log_dir(cmd, rest)
     if bad:
         print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)

@@ -232,6 +232,7 @@ class RunConfig:
     offered: every x86-64 CPU since 2013 runs the AVX2 path, and ARM has neither these kernels nor MKL, so they
     would cost speed without making more machines agree"""
     runs_root: str = "outputs"
+    """the directory that holds every run (NEUROSYM_RUNS; default outputs, in the working directory)"""
     exp_dir: str = MISSING
     """stable artifact directory of this (task, budget, seed); later stages find upstream files here"""
     overwrite: bool = False

@@ -43,21 +43,37 @@ def known_keys(task_schemas: list[type] | None = None) -> dict[str, str]:
     return keys
 
 
+_KINDS = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a text"}
+
+
+def _unquote(value: str) -> str:
+    return value[1:-1] if len(value) > 1 and value[0] == value[-1] and value[0] in "'\"" else value
+
+
 def _type_error(value: str, typ: str) -> str | None:
-    """Why ``value`` cannot be a ``typ`` (int, float, bool), or None when it can (or cannot be judged here)."""
-    if value.startswith(("${", "[", "{", "'", '"')) or value.startswith(_FUNCS) or value == "null":
+    """Why ``value`` cannot be a ``typ`` (int, float, bool; list[...] of them), or None when it can (or cannot be
+    judged here: interpolations, sweep functions, dictionaries)."""
+    if value.startswith(("${", "{")) or value.startswith(_FUNCS) or value == "null":  # null: check() judges it
         return None
-    for part in value.split(","):  # a sweep: seed=0,1,2
-        part = part.strip()
+    if typ.startswith("list["):
+        inner = typ[5:-1]
+        if not (value.startswith("[") and value.endswith("]")) or inner not in ("int", "float", "bool"):
+            return None  # a sweep over lists, or a list of texts: Hydra's grammar check judges it
+        bad = [_type_error(v.strip(), inner) for v in value[1:-1].split(",") if v.strip()]
+        return next((f"a list of {w.removeprefix('an ').removeprefix('a ')}s" for w in bad if w), None)
+    if value.startswith("["):
+        return f"one value ({_KINDS[typ]}), not a list; -m key=a,b sweeps over values"
+    for part in value.split(",") if value[:1] not in "'\"" else [value]:  # a sweep: seed=0,1,2
+        part = _unquote(part.strip())
         if typ == "int" and not _INT.fullmatch(part):
-            return "an integer"
+            return _KINDS[typ]
         if typ == "float":
             try:
                 float(part.replace("_", ""))
             except ValueError:
-                return "a number"
+                return _KINDS[typ]
         if typ == "bool" and part.lower() not in _BOOL:
-            return "true or false"
+            return _KINDS[typ]
     return None
 
 
@@ -115,8 +131,12 @@ def check(args: list[str], task_schemas: list[type] | None = None) -> str | None
             near = difflib.get_close_matches(key, list(keys), n=1, cutoff=0.6)
             hint = f"; did you mean {near[0]!r}?" if near else "; `neurosym <command> --cfg job` lists the keys"
             return f"unknown key {cut(repr(key))}{hint}"
-        typ = keys[key].replace("Optional[", "").rstrip("]")
-        if typ in ("int", "float", "bool"):
+        optional = keys[key].startswith("Optional[")
+        typ = keys[key].removeprefix("Optional[").removesuffix("]") if optional else keys[key]
+        if value == "null" and not optional and typ != "group" and not a.startswith("~"):
+            kind = _KINDS.get(typ, "a list [a,b]" if typ.startswith("list[") else "a value")
+            return f"{a}: {key} cannot be null; it takes {kind}" + (f" (an empty one: {key}='')" if typ == "str" else "")
+        if typ in ("int", "float", "bool") or typ.startswith("list["):
             why = _type_error(value, typ)
             if why:
                 return f"{cut(a)}: {key} takes {why}, not {cut(repr(value))}"

@@ -19,6 +19,22 @@ def baseline_of(label: str) -> str:
     return max(names, key=len) if names else label
 
 
+def short_labels(labels: Sequence[str]) -> list[str]:
+    """A name per label that tells it from the others: its baseline alone when no other label has that baseline,
+    else the baseline and the parts of its label the others lack (``prog-k2-lam0.5-v1``, ``prog-k3-lam0.5-v1`` ->
+    ``prog-k2``, ``prog-k3``)."""
+    base = [baseline_of(lbl) for lbl in labels]
+    out = []
+    for lbl, b in zip(labels, base):
+        peers = [p for p, pb in zip(labels, base) if pb == b]
+        if len(peers) == 1 or not lbl.startswith(b + "-"):  # alone, or a name of its own (rl1, rl2)
+            out.append(b if len(peers) == 1 else lbl)
+            continue
+        mine = lbl[len(b):].strip("-").split("-")
+        shared = set.intersection(*(set(p[len(b):].strip("-").split("-")) for p in peers))
+        out.append("-".join([b, *[x for x in mine if x and x not in shared]]) or lbl)
+    return out if len(set(out)) == len(out) else list(labels)
+
 def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsize: float = 7) -> None:
     """Label each point (xs[k], ys[k]) right of it; labels that would overprint another label or marker are moved
     up, with a leader line to their point. Call after the axes limits are final."""
@@ -87,7 +103,7 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     b.set_yticks(y, [])
     b.set_xlim(0, 1.6 * max(float(get("max_in", "mean").max()), float(get("max_out", "mean").max()), 1.0))
     b.set_xlabel("agents, max over agents and steps (mean over episodes)", fontsize=8)
-    b.set_title("(b) communication degree", fontsize=9)
+    b.set_title("(b) max in- and out-degree", fontsize=9)
     b.legend(fontsize=7, frameon=False, loc="lower right")
     xs, ls = get("max_in", "mean"), get("cost", "mean")
     for col, x, xe, l, le in zip(colors, xs, get("max_in", err), ls, get("cost", err)):
@@ -95,10 +111,10 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
     c.margins(x=0.25, y=0.12)
     x0, x1 = c.get_xlim()
     c.set_xlim(max(x0, -0.06 * x1), x1)  # a degree is never negative: no axis left of zero beyond the markers
-    place_labels(c, xs, ls, [baseline_of(lbl) for lbl in labels], colors)
+    place_labels(c, xs, ls, short_labels(labels), colors)
     c.set_xlabel("max in-degree (whom an agent hears)", fontsize=8)
     c.set_ylabel("loss", fontsize=8)
-    c.set_title("(c) loss against degree: lower left is better", fontsize=9)
+    c.set_title("(c) loss against max in-degree: lower left is better", fontsize=9)
     c.grid(alpha=0.3, lw=0.5)
     for ax in (a, b, c):
         ax.tick_params(labelsize=7)
@@ -199,7 +215,8 @@ def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int]
             ax.scatter(x, y, s=110, facecolors="none", edgecolors="black", lw=1.0, zorder=4)
     ax.scatter(*ref, marker="+", s=80, color="black", label=f"reference point ({ref[0]:.3g}, {ref[1]:.4g})")
     ax.scatter([], [], s=110, facecolors="none", edgecolors="black", label="non-dominated (ringed)")
-    ax.set_xlabel("max degree (in + out, the paper's deg; mean over episodes and seeds)", fontsize=8)
+    ax.set_xlabel("max in+out (the paper's deg: max over agents of in + out; mean over episodes and seeds)",
+                  fontsize=8)
     ax.set_ylabel("loss (lower is better)", fontsize=8)
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3, lw=0.5)
@@ -300,7 +317,7 @@ def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across
                 for s in seeds]
     ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=min(4, len(handles)),
               frameon=False)
-    ax.set_xlabel("max degree (in + out, the paper's deg; mean over steps, episodes and evaluation seeds)",
+    ax.set_xlabel("max in+out (the paper's deg; mean over steps, episodes and evaluation seeds)",
                   fontsize=8)
     ax.set_ylabel("loss (lower is better)", fontsize=8)
     ax.set_title(title, fontsize=9)

@@ -90,9 +90,10 @@ def test_interrupted_train_resumes(tmp_path):
     assert proc.returncode != 0 and "re-run the same command to resume" in err, err
     # the same command again picks up from the checkpoint (stopped as soon as it says so)
     proc = subprocess.Popen(args, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    first = proc.stdout.readline()
+    header, first = proc.stdout.readline(), proc.stdout.readline()  # the run's header line, then its first
     proc.kill()
     proc.communicate()
+    assert "neurosym train: task=two-groups-cross budget=tiny" in header, header
     assert "resuming" in first and "from step" in first, first
 
 

@@ -207,8 +207,8 @@ def test_search_view_labels_progress_and_summary(caplog):
     finally:
         cons.console = monkey_console
     text = rec.export_text()
-    for label in ("10/10 steps (final)", "elapsed", "left", "objective", "= L1 action error", "+ 0.5 x degree term",
-                  "degree term (max in+out)", "proposals/s", "moves: threshold = nudge one filter threshold"):
+    for label in ("10/10 steps (final)", "elapsed", "left", "objective", "= L1 action error", "+ 0.5 x max in+out",
+                  "max in+out: the program's max_i (in_i + out_i) on the synthesis dataset D", "proposals/s", "moves: threshold = nudge one filter threshold"):
         assert label in text, label
 
 
@@ -239,7 +239,7 @@ def test_a_sweep_job_with_a_missing_upstream_fails_alone(tmp_path):
     assert "sweep of synth: 2 jobs" in out and "1 of 2 jobs failed" in out
     results = sorted((tmp_path / "multirun/synth").glob("*/*/job_result.json"))
     outcome = {json.loads(f.read_text())["job"]: json.loads(f.read_text()) for f in results}
-    assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "degree", "artifact"}
+    assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "max in+out on D", "artifact"}
     assert outcome[0]["row"]["artifact"].endswith("random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt")
     assert not outcome[1]["ok"] and "no checkpoint" in outcome[1]["error"]
 

@@ -394,3 +394,30 @@ def test_simplification_of_a_filter_that_always_holds_and_a_repeated_rule():
     simple, done = simplify(sc, rules)
     assert simple == (planted,) and sc.score(simple).total == pytest.approx(before, abs=1e-9)
     assert "became `true` (always holds)" in done[0] and "only repeats earlier rules' picks" in done[1]
+
+
+def test_a_one_feature_or_that_covers_the_range_always_holds_and_a_negative_distance_never_does():
+    """The main job's det-prog had `filter(d <= 2.85 or d >= 2.56, l)` (every distance passes one branch), and a
+    committed random-cross program a rule on `d <= -0.3` (no distance is negative): both go, with or without D."""
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.dsl.printer import rule_text
+    from neurosym_cli.synth.simplify import always_holds, never_holds, simplify, simplify_static
+
+    planted, sc = _planted_scorer(lam=0.5)
+    v = sc.fmap.vocab
+
+    def c(text):
+        return parse(f"random(filter({text}, l))").rounds[0][0].cond
+
+    assert always_holds(c("d <= 2.85 or d >= 2.56"), v) and always_holds(c("d <= 2.5 or d >= 2.5"), v)
+    assert always_holds(c("dx <= 1.0 or gd >= 3.0 or dx >= 0.5"), v)  # the dx branches cover every dx
+    assert not always_holds(c("d <= 2.5 or d >= 2.6"), v) and not always_holds(c("dx <= 1.0 or dy >= 0.5"), v)
+    assert never_holds(c("d <= -0.3 and gtheta <= -1.75"), v)
+    rules = parse("argmax(map(-1.0*d, filter(d <= 2.85 or d >= 2.56, l)))\n").rounds[0]
+    simple, done = simplify(sc, rules)
+    assert [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(true, l)))"] and "always holds" in done[0]
+    rules = parse("argmax(map(-1.0*d, filter(true, l)))\nargmax(map(-1.0*gd, filter(d <= -0.3 and gtheta <= -1.75, l)))\n"
+                  "random(filter(d >= -1.0 and gd <= 3.0 or d <= -2.0, l))\n").rounds[0]
+    simple, notes = simplify_static(rules, v)
+    assert [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(true, l)))", "random(filter(gd <= 3.0, l))"]
+    assert "rule 2: dropped" in notes[0] and "never fires" in notes[0] and len(notes) == 3

@@ -56,15 +56,19 @@ def job_prefix(overrides: list[str], num: int) -> str:
     return " ".join(picked) if picked else f"job {num}"
 
 
-def _row(result: Any) -> dict[str, Any]:
-    """The numbers of a verb's result worth a column in a sweep's comparison table."""
+def _row(result: Any, objective: str = "paper") -> dict[str, Any]:
+    """The numbers of a verb's result worth a column in a sweep's comparison table (``objective``: the search's
+    synth.objective, which names a program's degree term)."""
+    from ..degrees import objective_term
+
     if not isinstance(result, dict):
         return {}
     if isinstance(result.get("cost"), dict):  # eval: the summary of every metric
-        return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in-deg", "max_in"),
-                                                     ("max out-deg", "max_out")) if isinstance(result.get(m), dict)}
-    keep = {k: v for k, v in result.items()
-            if k in ("loss", "objective", "l1", "degree", "frames") and isinstance(v, (int, float))}
+        return {k: result[m]["mean"] for k, m in (("loss", "cost"), ("max in", "max_in"), ("max out", "max_out"),
+                                                     ("max in+out", "max_degree")) if isinstance(result.get(m), dict)}
+    names = {"loss": "loss", "objective": "objective", "l1": "l1", "degree": f"{objective_term(objective)} on D",
+             "frames": "frames"}
+    keep = {names[k]: v for k, v in result.items() if k in names and isinstance(v, (int, float))}
     for k in ("program", "tree", "checkpoint", "selected"):  # where the job's artifact is: the sweep table shows it
         if isinstance(result.get(k), str):
             keep["artifact"] = result[k]
@@ -88,12 +92,67 @@ def typed_config(cfg: DictConfig) -> RunConfig:
         raise UserError(str(e).splitlines()[0]) from None
 
 
+def _wrote_since(exp_dir: Path, logs: Path, started: float) -> bool:
+    """Whether a file under ``exp_dir`` (its log directories aside) changed since ``started`` (time.time())."""
+    import os
+
+    for top, dirs, files in os.walk(exp_dir):
+        dirs[:] = [d for d in dirs if Path(top, d) != logs.parent]
+        for f in files:
+            try:
+                if os.stat(Path(top, f)).st_mtime >= started:
+                    return True
+            except OSError:
+                continue
+    return False
+
+
+def _drop_log_dir(logs: Path, cfg: DictConfig, started: float) -> None:
+    """A command that stopped on bad input before writing anything did nothing worth a record: its Hydra log
+    directory goes, and with it the directories Hydra made for it that are empty now
+    (``<task>/<budget>/seed<S>/logs``), up to the runs root. Its one-line error is the whole story. The logs of a
+    command that wrote something before it stopped are kept."""
+    import shutil
+
+    from ..errors import lies_under
+
+    root = Path(str(cfg.get("runs_root", "") or "")).expanduser().absolute()
+    if not str(cfg.get("runs_root", "")) or not lies_under(logs, root) or logs.absolute() == root:
+        return  # logs the user sent elsewhere (hydra.run.dir=...) are theirs
+    if _wrote_since(Path(str(cfg.get("exp_dir", logs.parent.parent))), logs, started):
+        return
+    shutil.rmtree(logs, ignore_errors=True)
+    for d in logs.absolute().parents:
+        if d == root or not lies_under(d, root):
+            break
+        try:
+            d.rmdir()  # only when empty
+        except OSError:
+            break
+
+
+def run_header(name: str, cfg: RunConfig, sources: dict[str, str]) -> str:
+    """A command's first log line: the task, budget and seed in effect (and where a persistent default came from,
+    ``defaults.py``), and the run directory."""
+    def where(key: str) -> str:
+        return f" (from {sources[key]})" if key in sources else ""
+
+    read = cfg.report_dir or cfg.report.seed_files  # report of another directory: the task and budget play no part
+    if read:
+        return f"neurosym {name.replace('_', '-')}: {read}"
+    return (f"neurosym {name.replace('_', '-')}: task={cfg.task.name}{where('task')} budget={cfg.budget.name}"
+            f"{where('budget')} seed={cfg.seed} -> {cfg.exp_dir}")
+
+
 def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], Any]) -> Any:
     """Run a verb's ``run(typed config, run info)``; bad input and Ctrl-C end in one line, never a traceback.
 
     Inside a multirun a job's bad input fails that job alone: its line is printed, its outcome written to
     job_result.json in its Hydra directory, and the other jobs run; the sweep's summary (``sweep.py``) lists
     every job and exits non-zero when one failed."""
+    import time
+
+    started = time.time() - 1.0  # file times can lag the clock by a tick
     hc = HydraConfig.get()
     sweep = hc.mode == RunMode.MULTIRUN
     _plain_logs_off_terminal()
@@ -117,6 +176,10 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
 
         warn_once(typed.cpu_kernels)  # torch is loaded by now: one line if the config asks for other kernels
         info = RunInfo(sweep, hc.runtime.output_dir)
+        from ..defaults import sources_in_effect
+        from ..utils.console import log
+
+        log.info(run_header(name, typed, sources_in_effect()))
         from ..utils.io import confine
 
         # the runs root, the output directories a user named, and Hydra's own (job_result.json; a read-only
@@ -137,6 +200,7 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
         if msg is None:
             raise
         if not sweep:
+            _drop_log_dir(Path(hc.runtime.output_dir), cfg, started)
             _error(name, msg)
         from ..utils.console import say
         from ..utils.io import write_json
@@ -149,5 +213,5 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     if sweep:
         from ..utils.io import write_json
 
-        write_json(record, {"ok": True, **stamp, "row": _row(result)})
+        write_json(record, {"ok": True, **stamp, "row": _row(result, typed.synth.objective)})
     return result

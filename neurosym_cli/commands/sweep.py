@@ -89,6 +89,16 @@ def collect(sweep_dir: Path) -> list[dict[str, Any]]:
     return rows
 
 
+def _cell(v: Any) -> str:
+    """A table cell: floats with three decimals as every results table has them (413.806, never 414), the very
+    large and very small in three significant digits."""
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.3f}" if v == 0 or 1e-3 <= abs(v) < 1e7 else f"{v:.3g}"
+    return str(v)
+
+
 class SweepSummary(Callback):
     """Marks the sweep directory, prints the sweep's comparison table and fails the command when a job failed."""
 
@@ -110,7 +120,11 @@ class SweepSummary(Callback):
         cols: list[str] = []
         for r in rows:
             cols += [c for c in r.get("row", {}) if c not in cols]
-        t = Table(title=f"sweep of {config.get('cmd', '')}: {len(rows)} jobs ({sweep_dir})", header_style="bold")
+        from ..degrees import LEGEND, NAMES
+
+        shows_degrees = any(c in NAMES.values() for c in cols)
+        t = Table(title=f"sweep of {config.get('cmd', '')}: {len(rows)} jobs ({sweep_dir})", header_style="bold",
+                  caption=LEGEND if shows_degrees else None, caption_justify="left")
         t.add_column("#", justify="right")
         t.add_column("job")
         for c in cols:
@@ -120,7 +134,7 @@ class SweepSummary(Callback):
             ov = [o for o in r.get("overrides", []) if not swept or o.split("=")[0].lstrip("+~") in swept]
             vals = [r.get("row", {}).get(c) for c in cols]
             t.add_row(str(r.get("job", "")), " ".join(ov) or "-",
-                      *("-" if v is None else f"{v:.4g}" if isinstance(v, float) else str(v) for v in vals),
+                      *(_cell(v) for v in vals),
                       "[green]ok[/]" if r.get("ok") else f"[red]failed[/]: {r.get('error', '')}")
         console.print(t)
         failed = [r for r in rows if not r.get("ok")]

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import paths
-from ..baselines import ORACLE, Artifact, Stage
+from ..baselines import ORACLE, Artifact, Stage, runs_root_arg
 from ..errors import ConfigError
 from .families import OnOracle, Retrained
 
@@ -88,7 +88,7 @@ class Searched(OnOracle):
         named = "" if VERB_DEFAULTS.get(verb) == baseline else f" baseline={baseline}"
         obj = "".join(override for _, override in self.variants(cfg))
         return (f"neurosym {verb} task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
-                f" budget={cfg.budget.name} seed={cfg.seed}{named}{obj}{extra}")
+                f" budget={cfg.budget.name} seed={cfg.seed}{runs_root_arg(cfg)}{named}{obj}{extra}")
 
     def command(self, verb: str, cfg: "RunConfig") -> str:
         if verb == "synth":

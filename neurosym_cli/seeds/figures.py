@@ -62,7 +62,7 @@ def draw(by_task: dict[str, Sequence[SeedRun]], out_dir: Path, mix: bool = False
         what = (f"{n} training seeds: one small marker per seed, the mean ± 95 % t-interval across seeds"
                 if n > 1 else "1 training seed: no interval across seeds")
         budget = runs[0].settings.get("budget")
-        made.append(seeds_plane(pts, across, f"{task} ({budget} budget): loss against max degree over training "
+        made.append(seeds_plane(pts, across, f"{task} ({budget} budget): loss against max in+out over training "
                                 f"seeds\n{what}; lower left is better", out_dir / f"seeds-{task}.png"))
     scores, left = normalized(by_task)
     scores = {k: v for k, v in scores.items() if k not in ("tf-full", "no-comm")}  # 1 and 0 by definition

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 from .. import paths
+from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
@@ -138,7 +139,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
                                                       f"{head}: Figure 5, episode {cfg.episode}"))
     if not made:
         raise ArtifactError(f"no trained baselines to draw in {cfg.exp_dir}; run `neurosym pipeline "
-                            f"task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` first")
+                            f"{run_args(cfg)}` first")
     for name, p in made.items():
         say(f"[green]figure[/] {name}: {p}")
     return made

@@ -7,13 +7,14 @@ from pathlib import Path
 
 from .. import paths, schemes
 from ..config import RunConfig
+from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
 
-COLUMNS = [("cost", "loss"), ("max_in", "max in-deg"), ("max_out", "max out-deg"), ("mean_degree", "mean deg"),
+COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
            ("collisions", "collisions")]
 """(metric, column title) of every results table"""
 
@@ -98,10 +99,13 @@ def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[
     write_csv(csv_path, [{"label": label, "max_degree": x, "loss": y, "non_dominated": int(k in front),
                           "ref_max_degree": ref[0], "ref_loss": ref[1], "dominated_area": area}
                          for k, (label, x, y) in enumerate(pts)])
-    png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + "\nloss against degree: the lower "
-                      "left is better", root / "pareto.png") if plot else None
-    log.info("non-dominated (loss, max degree): %s; dominated area %.4g up to %s",
-             ", ".join(pts[i][0] for i in front), area, tuple(round(v, 4) for v in ref))
+    png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + f"\nloss against {NAMES['max_degree']}: "
+                      "the lower left is better", root / "pareto.png") if plot else None
+    shown = sorted(front, key=lambda i: (pts[i][2], pts[i][1]))  # lowest loss first
+    log.info("non-dominated (loss, %s), lowest loss first: %s; dominated area %.4g up to the reference point "
+             "(loss %.4g, %s %.4g)", NAMES["max_degree"],
+             ", ".join(f"{pts[i][0]} ({pts[i][2]:.3f}, {pts[i][1]:.3f})" for i in shown), area, ref[1],
+             NAMES["max_degree"], ref[0])
     return csv_path, png
 
 
@@ -122,7 +126,7 @@ def write_figure(cfg: RunConfig) -> Path:
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
     rows = collect(Path(cfg.exp_dir), paths.pipeline_command(cfg))
-    console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95"))
+    console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95", caption=LEGEND))
     if cfg.plots:
         png = write_figure(cfg)
         console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
@@ -136,7 +140,7 @@ def across_table(s, digits: int = 3):
 
     n = len(s.seeds)
     t = Table(title=f"{s.task}: {n} training seed{'s' if n > 1 else ''} ({', '.join(map(str, s.seeds))})",
-              caption=seeds.caption(n), header_style="bold", caption_justify="left")
+              caption=f"{seeds.caption(n)}\n{LEGEND}", header_style="bold", caption_justify="left")
     t.add_column("baseline")
     t.add_column("n seeds", justify="right")
     for _, head in COLUMNS:
@@ -213,8 +217,7 @@ def report(cfg: RunConfig) -> dict:
         root = Path(cfg.report_dir) if cfg.report_dir else Path(cfg.exp_dir).parent  # <runs_root>/<task>/<budget>
         runs = seeds.from_runs_root(root)
         if not runs:
-            raise ArtifactError(f"no evaluations under {root}; run `neurosym pipeline task={cfg.task.name} "
-                                f"budget={cfg.budget.name}` (or `neurosym eval ...`) first")
+            raise ArtifactError(f"no evaluations under {root}; {_what_makes(cfg, root)}")
         task = runs[0].task or cfg.task.name
         by_task = {task: runs}
         out = root
@@ -253,6 +256,35 @@ def report(cfg: RunConfig) -> dict:
         if figures:  # drawn per training seed by the pipeline or `neurosym figures`
             console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
     return {"report": str(out / "report.json")}
+
+
+def _what_makes(cfg: RunConfig, root: Path) -> str:
+    """What to run when ``root`` holds no evaluations: the pipeline of the (task, budget[, seed]) that ``root``
+    names (report_dir=<runs root>/<task>[-fail<p>]/<budget>[/seed<k>], any runs root), else where report_dir must
+    point."""
+    import os
+    import re
+    import shlex
+    from importlib.resources import files
+
+    from ..baselines import run_args
+    from ..tasks.registry import task_choices
+
+    if not cfg.report_dir:
+        return f"run `neurosym pipeline {run_args(cfg)}` (or `neurosym eval ...`) first"
+    path = root.absolute()
+    seed = re.fullmatch(r"seed(\d+)", path.name)
+    run = path.parent if seed else path  # <runs root>/<task>/<budget>
+    task, fail = re.fullmatch(r"(.+?)(?:-fail([0-9.e-]+))?", run.parent.name or "-").groups()
+    if task in task_choices() and (files("neurosym_cli.conf") / "budget" / f"{run.name}.yaml").is_file():
+        runs_root = run.parent.parent
+        same = runs_root.resolve() == Path(os.environ.get("NEUROSYM_RUNS", "outputs")).resolve()
+        line = (f"neurosym pipeline task={task} budget={run.name}" + (f" seed={seed.group(1)}" if seed else "")
+                + (f" task.link_failure={fail}" if fail else "")
+                + ("" if same else " " + shlex.quote(f"runs_root={runs_root}")))
+        return f"run `{line}` (or `neurosym eval ...`) first"
+    return ("report_dir= names a directory of run directories (<runs_root>/<task>/<budget>, holding seed<k>/eval/), "
+            "or one seed<k> directory of it; `neurosym pipeline` writes their evaluations")
 
 
 def _rows_for_figures(s) -> Rows:

@@ -20,8 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__, paths
+from ..baselines import run_args
 from ..schemes import get
 from ..config import RunConfig
+from ..degrees import LEGEND
 from ..stats import mean_ci
 from ..utils.console import clock, say
 from ..utils.cpu import runtime
@@ -105,7 +107,7 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "
-        f"(`neurosym report budget={cfg.budget.name} task={cfg.task.name}` lists them beside the others)")
+        f"(`neurosym report {run_args(cfg, seed=False)}` lists them beside the others)")
     return {"rl1": rl1["name"], "rl1 loss": test["rl1"]["cost"]["mean"], "rl2": rl2["name"],
             "rl2 loss": test["rl2"]["cost"]["mean"]}
 
@@ -118,7 +120,8 @@ def print_grid(cfg: RunConfig, rows: list[dict[str, Any]], test: dict) -> None:
 
     t = Table(title=f"rl (communication decisions as actions): {cfg.task.name}, {cfg.budget.val_seeds} validation "
                     "seeds; ± = 95 % Student-t interval over the validation seeds", header_style="bold")
-    for c in ("setting", "cost", "reward", "init", "val loss ± CI", "max in", "max out", "max deg", "rollouts/s", ""):
+    for c in ("setting", "cost", "reward", "init", "val loss ± CI", "max in", "max out", "max in+out", "rollouts/s",
+              ""):
         t.add_column(c, justify="left" if c in ("setting", "reward", "init", "") else "right")
     for r in sorted(rows, key=lambda r: r["val_loss"]):
         t.add_row(r["name"], f"{r['cost']:g}", "to go" if r["shaped"] else "episode", r["init"],
@@ -126,8 +129,9 @@ def print_grid(cfg: RunConfig, rows: list[dict[str, Any]], test: dict) -> None:
                   f"{r['max_degree']:.2f}", f"{r['rollouts_per_second'] or 0:.1f}",
                   f"[green]◀ {r['pick']}[/]" if r["pick"] else "")
     console.print(t)
+    console.print(LEGEND)
     for label, s in test.items():
         console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
                       f"one model) {label}: loss {s['cost']['mean']:.3f} ± "
                       f"{s['cost']['ci95']:.3f}, max in-degree {s['max_in']['mean']:.2f}, max out-degree "
-                      f"{s['max_out']['mean']:.2f}, max degree {s['max_degree']['mean']:.2f}")
+                      f"{s['max_out']['mean']:.2f}, max in+out {s['max_degree']['mean']:.2f}")

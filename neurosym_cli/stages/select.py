@@ -25,8 +25,10 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__, paths
+from ..baselines import run_args
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
+from ..degrees import LEGEND
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
@@ -85,6 +87,46 @@ def point_name(cfg: RunConfig) -> str:
 
 def _val_file(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "select" / "val" / f"{paths.baseline_label(cfg)}.json"
+
+
+SEARCH_KEYS = ("objective", "own_scores", "simplify", "coarse", "patience")
+"""the synth settings that name a program (schemes/searched.py ``search_variants``) and that selected.json records"""
+
+
+def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
+    """A line for the grid points whose program is not on disk but one of the same (K, lambda, features) is, searched
+    with other settings (a sweep of `neurosym synth` at its own schedule): the command that makes select reuse
+    them; None when there are none. Select never swaps in a program of another search silently: the pick would
+    then depend on what happened to be on disk."""
+    import shlex
+
+    found: dict[str, list[str]] = {}
+    for p in points:
+        if (paths.synth_dir(p) / "program.txt").exists():
+            continue
+        stem = f"k{p.rules}-lam{p.lam:g}-{p.features}"
+        for d in sorted((Path(cfg.exp_dir) / "synth").glob(f"{stem}*/summary.json")):
+            if d.parent.name != stem and not d.parent.name.startswith(stem + "-"):
+                continue  # k1-lam0.5-v1 is not k1-lam0.5-v10
+            try:
+                synth = read_json(d)["config"]["synth"]
+                key = " ".join(f"synth.{k}={str(synth[k]).lower() if isinstance(synth[k], bool) else synth[k]}"
+                               for k in SEARCH_KEYS if synth[k] != getattr(cfg.synth, k))
+            except (UserError, KeyError, TypeError):
+                continue  # not a summary of this version: nothing to offer
+            found.setdefault(key, []).append(d.parent.name)
+            break
+    found.pop("", None)
+    if not found:
+        return None
+    overrides, tags = max(found.items(), key=lambda kv: len(kv[1]))
+    grid = [f"select.{k}=[{','.join(f'{x:g}' if isinstance(x, float) else str(x) for x in getattr(cfg.select, k))}]"
+            for k in ("lam", "rules", "features")]
+    line = f"neurosym select {run_args(cfg)} " + " ".join(shlex.quote(g) for g in grid) + f" {overrides}"
+    ours = " ".join(f"synth.{k}={getattr(cfg.synth, k)}" for k in ("coarse", "patience"))
+    return (f"{len(tags)} of the {len(points)} grid programs exist searched with other settings ({', '.join(tags[:3])}"
+            f"{', ...' if len(tags) > 3 else ''}); select searches them again on its own schedule ({ours}); "
+            f"`{line}` selects among those instead")
 
 
 def validate(cfg: RunConfig) -> dict[str, Any]:
@@ -226,7 +268,7 @@ def selected_file(cfg: RunConfig) -> Path:
 
 
 def select_command(cfg: RunConfig) -> str:
-    return f"neurosym select task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}"
+    return f"neurosym select {run_args(cfg)}"
 
 
 def apply_selected(cfg: RunConfig) -> RunConfig:
@@ -258,6 +300,9 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     t0 = time.perf_counter()
     say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
         f"features {cfg.select.features}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
+    other = searched_otherwise(cfg, points)
+    if other:
+        log.warning(other)
     if jobs > 1 and not paths.dataset_file(points[0]).exists():
         from .synth import collect_dataset
 
@@ -277,11 +322,10 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     record = {"command": "select", "version": __version__, "task": cfg.task.name, "seed": cfg.seed,
               "budget": cfg.budget.name, "name": pick["name"], "rules": chosen.rules, "lam": chosen.lam,
               "features": chosen.features,
-              "synth": {k: getattr(chosen.synth, k) for k in ("objective", "own_scores", "simplify", "coarse",
-                                                                "patience")},
+              "synth": {k: getattr(chosen.synth, k) for k in SEARCH_KEYS},
               "program": str(paths.program_file(chosen)), "val_seeds": cfg.budget.val_seeds,
               "rule": "lowest mean validation loss; among programs whose paired 95% interval of the loss "
-                      "difference to it contains 0, the lowest max degree"}
+                      "difference to it contains 0, the lowest max in+out"}
     write_json(selected_file(cfg), record)  # the choice is fixed before any test episode is played
     t_select = time.perf_counter() - t0
     test = {}
@@ -299,8 +343,8 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         "jobs": jobs, "runtime": runtime(), "config": cfg.record()})
     print_selection(table, cfg, pick["name"], test)
     say(f"[green]selected[/] {pick['name']} -> {selected_file(cfg)} ({clock(time.perf_counter() - t0)}); "
-        f"`neurosym eval task={cfg.task.name} baseline=prog-retrained selected=true` and "
-        f"`neurosym pipeline task={cfg.task.name} selected=true` use it")
+        f"`neurosym eval {run_args(cfg)} baseline=prog-retrained selected=true` and "
+        f"`neurosym pipeline {run_args(cfg)} selected=true` use it")
     return {"selected": pick["name"], "loss": test["prog-retrained"]["cost"]["mean"],
             "max in-deg": test["prog-retrained"]["max_in"]["mean"]}
 
@@ -336,7 +380,7 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                     f"(prog = oracle under the program; finalists retrained); ± = 95 % Student-t interval over the "
                     "validation seeds (Δ best: paired)", header_style="bold")
     for c in ("#", "lam", "K", "feat", "objective", "val loss ± CI", "Δ best ± CI", "max in", "max out",
-              "max deg", "retrained val loss", "ret. deg", ""):
+              "max in+out", "retrained val loss", "ret. max in+out", ""):
         t.add_column(c, justify="left" if c in ("feat", "") else "right")
     for r in rows:
         ret = "-" if r["retrained_val_loss"] is None else \
@@ -350,10 +394,11 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                   "[green]◀ picked[/]" if r["picked"] else ("finalist" if r["finalist"] else ""))
     console.print(t)
     console.print("* worse than the validation-best: its paired 95 % interval excludes 0. Among the finalists "
-                  "(similar to the best, lowest degree first), the pick is the lowest max degree whose retrained "
+                  "(similar to the best, lowest max in+out first), the pick is the lowest max in+out whose retrained "
                   "validation loss is similar to the best retrained one.")
+    console.print(LEGEND)
     pr = test["prog-retrained"]
     console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
                   f"one model) of {picked}: prog-retrained loss "
                   f"{pr['cost']['mean']:.3f} ± {pr['cost']['ci95']:.3f}, max in-degree {pr['max_in']['mean']:.2f}, "
-                  f"max degree {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")
+                  f"max in+out {pr['max_degree']['mean']:.2f}; prog loss {test['prog']['cost']['mean']:.3f}")

@@ -12,6 +12,7 @@ from rich.table import Table
 
 from .. import paths
 from ..config import ConfigError, RunConfig
+from ..degrees import objective_legend, objective_term
 from ..dsl.ast import Program, rule_features
 from ..dsl.vocabulary import FeatureSet
 from ..dsl.printer import describe, rule_text
@@ -37,8 +38,10 @@ def _stats(info, n_rules: int) -> list[dict] | None:
 
 
 def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: float | None,
-           title: str = "program") -> None:
-    """Print each rule in the paper's notation beside its reading, and the objective terms when known."""
+           title: str = "program", objective: str = "paper") -> None:
+    """Print each rule in the paper's notation beside its reading, and the objective terms when known
+    (``objective``: the search's synth.objective, which names its degree term)."""
+    term = objective_term(objective)
     for r, rules in enumerate(program.rounds):
         t = Table(show_header=True, header_style="bold", expand=False,
                   caption="[cyan]my[/]: the asking agent's own state, the same for every candidate (a guard, or a "
@@ -70,7 +73,7 @@ def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: 
         sub = ""
         if isinstance(info, dict) and lam is not None:
             try:
-                sub = (f"objective {info['objective']:.4f} = L1 action error {info['l1']:.4f} + {lam:g} x degree "
+                sub = (f"objective {info['objective']:.4f} = L1 action error {info['l1']:.4f} + {lam:g} x {term} "
                        f"{info['degree']:.3f}")
             except (KeyError, TypeError, ValueError):
                 sub = ""  # a summary of another shape: the rules are still worth showing
@@ -80,20 +83,24 @@ def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: 
             console.print(f"[dim]simplified after the search:[/] {line}")
         hall = info.get("hall_of_fame") if isinstance(info, dict) else None
         if isinstance(hall, dict):
-            hall_of_fame(hall, lam, name)
+            hall_of_fame(hall, lam, name, objective)
+    if rounds:
+        console.print(f"[dim]{objective_legend(objective)}[/]")
 
 
-def hall_of_fame(hall: dict, lam: float | None, name: str) -> None:
+def hall_of_fame(hall: dict, lam: float | None, name: str, objective: str = "paper") -> None:
     """PySR-style hall of fame of one round: the best program found at each complexity and at each degree level,
     dominated rows left out, the search's pick marked (summary.json's ``hall_of_fame``)."""
+    term = objective_term(objective)
     heads = {"complexity": ("complexity", "rules + tests; kept when its objective beats every simpler program's"),
-             "degree": ("degree ≤", "the degree term rounded up; kept when its L1 beats every lower level's")}
+             "degree": (f"{term} ≤", f"the objective's {term} rounded up; kept when its L1 beats every lower "
+                                    "level's")}
     for by, (head, why) in heads.items():
         rows = hall.get(by)
         if not isinstance(rows, list) or not rows:
             continue
         t = Table(title=f"hall of fame by {by}: {name}", caption=why, header_style="bold")
-        for c in (head, "objective", "L1", "degree", "program", ""):
+        for c in (head, "objective", "L1", term, "program", ""):
             t.add_column(c, justify="left" if c in ("program", "") else "right")
         for r in rows:
             try:
@@ -115,15 +122,16 @@ def show_program(cfg: RunConfig) -> dict:
 
     fmap = feature_map(cfg)
     check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist
-    rounds, lam = None, None
+    rounds, lam, objective = None, None, cfg.synth.objective
     summary = path.parent / "summary.json"
     if summary.is_file():
         try:
             meta = json.loads(summary.read_text())
             rounds, lam = meta.get("rounds"), meta.get("lam")
+            objective = str(((meta.get("config") or {}).get("synth") or {}).get("objective", objective))
         except (OSError, ValueError, AttributeError):
             pass
     if not isinstance(rounds, list) or not isinstance(lam, (int, float)):
         rounds, lam = None, None
-    render(program, fmap.vocab, rounds, lam, title=str(Path(path)))
+    render(program, fmap.vocab, rounds, lam, title=str(Path(path)), objective=objective)
     return {"program": str(path)}

@@ -10,9 +10,11 @@ from pathlib import Path
 from typing import Any
 
 from .. import paths
+from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..policy.footprint import DoesNotFit
+from ..degrees import LEGEND
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
@@ -90,7 +92,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
                      n, f, r["cost"]["mean"], r["max_in"]["mean"], clock(time.perf_counter() - t0))
     if not results and not stops:
         raise UserError("stress: no baseline of stress.baselines is trained here; "
-                        f"`neurosym pipeline task={cfg.task.name} budget={cfg.budget.name} seed={cfg.seed}` makes them")
+                        f"`neurosym pipeline {run_args(cfg)}` makes them")
     out = Path(cfg.exp_dir) / "stress"
     write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
                                      "seeds": cfg.stress.seeds, "results": results, "skipped": skipped, "stops": stops,
@@ -117,7 +119,8 @@ def print_stress(results: list[dict], cfg: RunConfig, stops: dict[str, dict] | N
             continue
         keys = sorted({r["agents_per_group"] if axis == "agents" else r["link_failure"] for r in rows})
         t = Table(title=f"zero-shot {head} ({cfg.task.name}, trained at {cfg.task.agents_per_group} per group, "
-                        f"{cfg.stress.seeds} test seeds): loss / max in-degree / max out-degree",
+                        f"{cfg.stress.seeds} test seeds): loss / max in / max out",
+                  caption=LEGEND, caption_justify="left",
                   header_style="bold")
         t.add_column("baseline")
         for k in keys:

@@ -9,6 +9,7 @@ import torch
 
 from .. import __version__, artifacts, paths
 from ..config import ConfigError, RunConfig, UserError
+from ..degrees import objective_term
 from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
@@ -110,7 +111,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                                   generator(cfg.seed, STREAM_SYNTH, 300 + r), device, backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
-        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP) as disp, \
+        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp, \
                 open_tracker(cfg.logger, paths.tensorboard_dir(cfg, run)) as tracker:
             def on_step(step: int, result, row: dict) -> None:
                 disp.update(step, result, row)
@@ -142,8 +143,8 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
-    header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x degree "
-               f"{x['degree']:.4f}" for x in rounds]
+    header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x "
+               f"{objective_term(cfg.synth.objective)} {x['degree']:.4f}" for x in rounds]
     save_program(out / "program.txt", to_text(program), header)
     write_csv(out / "trace.csv", trace)
     write_json(out / "summary.json", {

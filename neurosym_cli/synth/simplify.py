@@ -6,9 +6,10 @@ that never or always fires, a filter clause that can never hold (``d >= 3 and d 
 an angle beyond pi), a clause that holds for every pair of D or for none.
 
 Simplification keeps the objective: it drops filter clauses that change no pick on D (a clause that always holds
-inside an ``and``, never holds inside an ``or``, or can never hold) and rules that never fire, and keeps a change
-only when the objective the search minimised is not worse (dropping a rule renumbers the random rules after it,
-which then draw other random numbers, so that is checked, never assumed).
+inside an ``and``, never holds inside an ``or``, or can never hold; an ``or`` whose one-feature branches cover the
+feature's range always holds) and rules that never fire, and keeps a change only when the objective the search
+minimised is not worse (dropping a rule renumbers the random rules after it, which then draw other random numbers,
+so that is checked, never assumed). ``simplify_static`` makes the data-free part of it for a program alone.
 """
 
 from __future__ import annotations
@@ -39,13 +40,37 @@ def _bounds(t: Test) -> tuple[str, float, float] | None:
     return (name, t.threshold / w, math.inf) if w > 0 else (name, -math.inf, t.threshold / w)
 
 
+def _disjuncts(c: Cond) -> list[Cond]:
+    return _disjuncts(c.left) + _disjuncts(c.right) if isinstance(c, Or) else [c]
+
+
+def _covered(c: Or, vocab: FeatureSet) -> bool:
+    """Whether the one-feature branches of an ``or`` chain cover a feature's whole range between them
+    (``d <= 2.85 or d >= 2.56``: every distance is below 2.85 or above 2.56)."""
+    spans: dict[str, list[tuple[float, float]]] = {}
+    for p in _disjuncts(c):
+        b = _bounds(p) if isinstance(p, Test) else None
+        if b is not None:
+            spans.setdefault(b[0], []).append((b[1], b[2]))
+    for name, parts in spans.items():
+        reach, top = _range(name, vocab)  # covered from the bottom of the range up to `reach`
+        for lo, hi in sorted(parts):
+            if lo > reach:
+                break  # a gap: values in (reach, lo) pass no branch
+            reach = max(reach, hi)
+        if reach >= top:
+            return True
+    return False
+
+
 def always_holds(c: Cond, vocab: FeatureSet) -> bool:
     """True when every pair passes ``c``, whatever the data: ``true``, a bound every value of the feature meets
-    (``d >= -0.6``: a distance is never negative), or an ``or`` with such a branch."""
+    (``d >= -0.6``: a distance is never negative), an ``or`` with such a branch, or an ``or`` whose one-feature
+    branches cover the feature's range (``d <= 2.85 or d >= 2.56``)."""
     if isinstance(c, TrueCond):
         return True
     if isinstance(c, Or):
-        return always_holds(c.left, vocab) or always_holds(c.right, vocab)
+        return any(always_holds(p, vocab) for p in _disjuncts(c)) or _covered(c, vocab)
     if isinstance(c, And):
         return always_holds(c.left, vocab) and always_holds(c.right, vocab)
     b = _bounds(c) if isinstance(c, Test) else None
@@ -204,6 +229,37 @@ def simplify(scorer: CachedScorer, rules: tuple[Rule, ...], tol: float = 1e-9) -
                         f"without it the random rules after it draw other random numbers and the objective goes "
                         f"from {best:.4f} to {new:.4f}")
     return rules, done
+
+
+def simplify_static(rules: tuple[Rule, ...], vocab: FeatureSet) -> tuple[tuple[Rule, ...], list[str]]:
+    """The rewrites that hold whatever the data, for a program without its dataset D (a committed result, a
+    hand-written file): a filter that always holds becomes ``true``, a clause that always holds leaves its ``and``,
+    one that never holds leaves its ``or``, and a rule whose filter never holds (it never fires) is dropped.
+    Returns the rules and one line per change. A dropped rule renumbers the random rules after it (their random
+    numbers differ, their distribution does not); ``simplify`` checks such a change on D, this one only reads."""
+    notes: list[str] = []
+    out = []
+    for k, r in enumerate(rules, start=1):
+        c = r.cond
+        if not isinstance(c, TrueCond) and always_holds(c, vocab):
+            notes.append(f"rule {k}: filter `{cond_text(c)}` is `true` (it always holds)")
+            c = TrueCond()
+        changed = True
+        while changed:
+            changed = False
+            for path, clause, op in _clauses(c):
+                if (op == "and" and always_holds(clause, vocab)) or (op == "or" and never_holds(clause, vocab)):
+                    why = "always holds" if op == "and" else "can never hold"
+                    notes.append(f"rule {k}: dropped `{cond_text(clause)}` from its filter ({why})")
+                    c, changed = _drop(c, path), True
+                    break
+        if never_holds(c, vocab):
+            notes.append(f"rule {k}: dropped `{rule_text(r)}`: it never fires (`{cond_text(c)}` can never hold)")
+            continue
+        out.append(replace(r, cond=c))
+    if not out:  # nothing ever fires: the program says so as it is
+        return rules, notes
+    return tuple(out), notes
 
 
 def _edges_added(scorer: CachedScorer, rules: tuple[Rule, ...], k: int) -> int:

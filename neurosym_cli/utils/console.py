@@ -79,8 +79,8 @@ class ProgressReporter:
             self.progress.stop()
 
     def update(self, step: int, total: int, metrics: Mapping[str, float]) -> None:
-        shown = ("rollouts", "loss", "degree", "grad_norm")
-        info = "  ".join(f"{k} {_fmt(v)}" for k, v in metrics.items() if k in shown)
+        shown = {"rollouts": "rollouts", "loss": "loss", "degree": "max in+out", "grad_norm": "grad_norm"}
+        info = "  ".join(f"{shown[k]} {_fmt(v)}" for k, v in metrics.items() if k in shown)
         if self.first_step is None:
             self.first_step = step - 1  # a resumed run: time left is measured from the steps of this run
         if self.progress is not None:
@@ -106,10 +106,10 @@ def _fmt(v: float) -> str:
 
 
 def metrics_table(title: str, rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]],
-                  columns: Sequence[tuple[str, str]], err: str = "std") -> Table:
+                  columns: Sequence[tuple[str, str]], err: str = "std", caption: str | None = None) -> Table:
     """rows: (label, summary) with summary[metric] = {mean, std, ...}; columns: (metric key, header); ``err``: the
-    summary key printed after ± (the title says what it is)."""
-    table = Table(title=title, header_style="bold")
+    summary key printed after ± (the title says what it is); ``caption``: a line under the table (a legend)."""
+    table = Table(title=title, header_style="bold", caption=caption, caption_justify="left")
     table.add_column("baseline")
     for _, header in columns:
         table.add_column(header, justify="right")
@@ -125,8 +125,12 @@ class SearchDisplay:
     acceptance per move type and proposals/s, in labelled columns; a closing summary line. A rich live view on a
     terminal; a plain line every ~10% of the steps otherwise."""
 
-    def __init__(self, label: str, total: int, lam: float, rich: bool, moves: Mapping[str, str] | None = None):
+    def __init__(self, label: str, total: int, lam: float, rich: bool, moves: Mapping[str, str] | None = None,
+                 objective: str = "paper"):
+        from ..degrees import objective_legend, objective_term
+
         self.label, self.total, self.lam, self.rich = label, total, lam, rich
+        self.term, self.legend = objective_term(objective), objective_legend(objective)  # the degree term's word
         self.moves = dict(moves or {})  # move name -> what it changes, explained under the table
         self.live = None
         self.progress: Progress | None = None
@@ -160,14 +164,14 @@ class SearchDisplay:
         t = Table(show_header=True, header_style="bold", title="best program so far", title_justify="left")
         t.add_column("objective", justify="right")
         t.add_column("= L1 action error", justify="right")
-        t.add_column(f"+ {self.lam:g} x degree term", justify="right")
-        t.add_column("degree term (max in+out)", justify="right")
+        t.add_column(f"+ {self.lam:g} x {self.term}", justify="right")
+        t.add_column(self.term, justify="right")
         t.add_column("proposals/s", justify="right")
         b = result.best_score
         t.add_row(f"{b.total:.4f}", f"{b.l1:.4f}", f"{self.lam * b.degree:.4f}", f"{b.degree:.3f}",
                   f"{result.proposals_per_second:.0f}")
         acc = "  ".join(f"{m} {100 * a:.0f}%" for m, a in result.acceptance().items())
-        parts = [self.progress, t, Text(f"accepted proposals per move: {acc}")]
+        parts = [self.progress, t, Text(self.legend, style="dim"), Text(f"accepted proposals per move: {acc}")]
         if self.moves:
             parts.append(Text("moves: " + "; ".join(f"{m} = {d}" for m, d in self.moves.items()), style="dim"))
         return Group(*parts)
@@ -182,14 +186,14 @@ class SearchDisplay:
             b = result.best_score
             acc = " ".join(f"{m}={100 * a:.0f}%" for m, a in result.acceptance().items())
             elapsed = now - self.t0
-            log.info("%s step %d/%d (%s elapsed, %s left)  best objective %.4f = L1 %.4f + %g x degree term %.3f"
+            log.info("%s step %d/%d (%s elapsed, %s left)  best objective %.4f = L1 %.4f + %g x %s %.3f"
                      "  |  %.0f proposals/s  |  accepted per move: %s", self.label, step, self.total,
                      clock(elapsed), clock(elapsed / step * (self.total - step)), b.total, b.l1, self.lam,
-                     b.degree, result.proposals_per_second, acc)
+                     self.term, b.degree, result.proposals_per_second, acc)
 
     def summary(self, result) -> None:
         """One closing line: the best objective, its terms, and the search's cost."""
         b = result.best_score
         say(f"[green]search done[/] {self.label}: best objective {b.total:.4f} = L1 {b.l1:.4f} + {self.lam:g} x "
-            f"degree term {b.degree:.3f}; {sum(result.proposed.values())} proposals in {clock(result.seconds)} "
-            f"({result.proposals_per_second:.0f}/s)")
+            f"{self.term} {b.degree:.3f}; {sum(result.proposed.values())} proposals in {clock(result.seconds)} "
+            f"({result.proposals_per_second:.0f}/s; {self.legend})")

@@ -27,6 +27,8 @@ def run_lock(directory: Path) -> Iterator[None]:
     """Hold ``directory``'s lock for the duration of the block (ArtifactError when another process holds it)."""
     directory = Path(directory)
     check_inside(directory)
+    made = [d for d in (directory, *directory.parents) if not d.exists()]  # deepest first
+    held = False
     try:
         directory.mkdir(parents=True, exist_ok=True)
         fd = os.open(directory / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
@@ -41,8 +43,26 @@ def run_lock(directory: Path) -> Iterator[None]:
                 holder = os.pread(fd, 512, 0).decode(errors="replace").strip() or "another process"
                 raise ArtifactError(f"{directory} is being written by {holder}; wait for it to finish (a rerun "
                                     f"then resumes or reuses its result), or write elsewhere with runs_root=...") from None
+        held = True
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"pid {os.getpid()} ({' '.join(sys.argv)[:200]})".encode(), 0)
         yield
     finally:
+        if held:
+            _tidy(directory, made)  # before the lock is released: nobody else can be using the directory
         os.close(fd)  # closing releases the lock
+
+
+def _tidy(directory: Path, made: list[Path]) -> None:
+    """A command that stopped before writing anything leaves no trace: the directories this lock made, when they
+    hold nothing but the lock file (a failed synth must not leave an empty synth/<tag>/)."""
+    if not made or made[0] != directory:
+        return
+    try:
+        if [p.name for p in directory.iterdir()] != [".lock"]:
+            return
+        (directory / ".lock").unlink()
+        for d in made:
+            d.rmdir()  # fails (and stops) on the first one that is not empty
+    except OSError:
+        pass

@@ -112,7 +112,7 @@ class _Scene:
         self.rings.set_offsets(rec.pos[t][hit] if hit.any() else np.zeros((0, 2)))
         loss = f"{rec.cost[:t].mean():7.2f}" if t > 0 else "      -"
         self.text.set_text(f"step {t:>3}/{rec.steps}  loss so far {loss}  "
-                           f"max in-deg {self.deg_in[s]:.0f}  max out-deg {self.deg_out[s]:.0f}  "
+                           f"max in {self.deg_in[s]:.0f}  max out {self.deg_out[s]:.0f}  "
                            f"colliding {int(hit.sum())}")
 
     def frame(self) -> np.ndarray:
@@ -196,7 +196,7 @@ def episode_png(rec: EpisodeRecord, path: Path, title: str) -> Path:
     din, dout = rec.degrees()
     b2.step(steps, din, where="mid", color="#4e79a7", lw=1.0, label="max in-degree (right axis)")
     b2.step(steps, dout, where="mid", color="#e15759", lw=1.0, ls="--", label="max out-degree (right axis)")
-    b2.set_ylabel("degree (agents)", fontsize=8)
+    b2.set_ylabel("agents (max in-, out-degree)", fontsize=8)
     b2.set_ylim(0, max(1.0, float(max(din.max(), dout.max()))) * 1.15)
     h1, l1 = b.get_legend_handles_labels()
     h2, l2 = b2.get_legend_handles_labels()
