@@ -44,17 +44,19 @@ class EpisodeRecord:
 
     def degrees(self) -> tuple[np.ndarray, np.ndarray]:
         """(T,) max in-degree and (T,) max out-degree over agents, mean over rounds (as the evaluation)."""
-        m = self.mask.astype(float)
+        m = self.mask  # integer counts of the bool mask: no (T, R, N, N) float copy of a large team's
         return m.sum(3).max(2).mean(1), m.sum(2).max(2).mean(1)
 
-    def rule_of_edge(self) -> np.ndarray | None:
-        """(T, R, N, N) int: the first rule that picked j for i (-1: no edge); None when no program ran."""
+    def rule_of_edge(self, receivers: np.ndarray | None = None) -> np.ndarray | None:
+        """(T, R, N, N) int: the first rule that picked j for i (-1: no edge); only the rows of ``receivers`` (S,)
+        when given, (T, R, S, N); None when no program ran."""
         if self.picks is None:
             return None
-        t, r, n, k = self.picks.shape
-        out = np.full((t, r, n, n), -1, dtype=np.int64)
+        picks = self.picks if receivers is None else self.picks[:, :, receivers]
+        t, r, n, k = picks.shape
+        out = np.full((t, r, n, self.n_agents), -1, dtype=np.int64)
         for rule in range(k - 1, -1, -1):  # the first rule that picked an agent names the edge
-            p = self.picks[..., rule]
+            p = picks[..., rule]
             tt, rr, ii = np.nonzero(p >= 0)
             out[tt, rr, ii, p[tt, rr, ii]] = rule
         return out

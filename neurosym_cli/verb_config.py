@@ -29,6 +29,10 @@ class RenderConfig:
     """figures: the baselines whose attention maps are drawn side by side"""
     agent: int = 0
     """figures: the asking agent of the rule-region picture (paper Figure 4)"""
+    crowd_from: int = 200
+    """from this many agents on, frames are drawn as a crowd: points by group, fading trails, sampled edges"""
+    receivers: int = 40
+    """crowd frames: the edges of this many receivers (drawn at random once, seeded) are shown, not all"""
 
     def __post_init__(self) -> None:
         check_finite(self, "render.")
@@ -36,6 +40,8 @@ class RenderConfig:
         _check(self.fps > 0 and self.every > 0 and self.trail >= 0 and self.round >= 1 and self.step >= 0
                and self.agent >= 0, "render.fps and render.every must be positive; render.round at least 1; "
                "render.trail, render.step and render.agent non-negative")
+        _check(self.crowd_from >= 1 and self.receivers >= 0,
+               "render.crowd_from must be positive and render.receivers non-negative")
 
 
 @dataclass

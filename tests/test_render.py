@@ -166,3 +166,40 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
 def test_figures_need_a_trained_run(tmp_path):
     p = run(["figures", "task=random-grid", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym pipeline task=random-grid budget=tiny" in p.stderr
+
+
+def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
+    """From render.crowd_from agents on, a frame draws the edges of the sampled receivers only: exactly their
+    edges, at most K per receiver, and far fewer than the step has."""
+    from PIL import Image
+
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.episode import protocol_episode, record_episode
+    from neurosym_cli.policy import CommTransformer
+    from neurosym_cli.tasks import make_task
+    from neurosym_cli.tasks.swarm import SwarmConfig
+    from neurosym_cli.viz.animate import animate
+    from neurosym_cli.viz.crowd import CrowdScene
+
+    env = make_task(SwarmConfig(name="swarm", agents_per_group=150), 3)  # N = 300
+    torch.manual_seed(0)
+    policy = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig(width=16, ffn=32))
+    state, gen, _ = protocol_episode(env, 0)
+    rec = record_episode(env, policy, _program(), state, gen, torch.device("cpu"))
+    assert rec.n_agents == 300 and rec.steps == 3
+    scene = CrowdScene(rec, "test: swarm", "rules", 0, 2, receivers=25, seed=1)
+    try:
+        assert len(scene.recv) == 25 and len(set(scene.recv.tolist())) == 25
+        for t in range(4):
+            scene.draw(t)
+            s = min(t, 2)
+            assert scene.drawn == rec.mask[s, 0][scene.recv].sum() <= 25 * 2  # K = 2 rules
+            assert scene.total == rec.mask[s, 0].sum() > 4 * scene.drawn
+            assert len(scene.edges.get_segments()) == scene.drawn
+    finally:
+        scene.close()
+    path, frames = animate(rec, tmp_path / "swarm.gif", "test: swarm", "rules", receivers=25,
+                           stills=tmp_path / "swarm-frames.png")
+    im = Image.open(path)
+    assert frames == im.n_frames == 4 and im.size[0] > 600
+    assert Image.open(tmp_path / "swarm-frames.png").size == (2 * im.size[0], 2 * im.size[1])

@@ -37,7 +37,8 @@ def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, s
 
 
 def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
-    """`neurosym render`: <exp_dir>/render/<label>/episode<k>.gif (or .mp4) and episode<k>.png."""
+    """`neurosym render`: <exp_dir>/render/<label>/episode<k>.gif (or .mp4), episode<k>.png (the whole episode)
+    and episode<k>-frames.png (four frames of the animation)."""
     from ..viz.animate import animate, edge_style, episode_png
 
     if cfg.render.round > cfg.task.rounds:
@@ -48,14 +49,17 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
     try:
         anim, frames = animate(rec, out / f"episode{cfg.episode}.{cfg.render.format}", title + round_note, style,
-                               cfg.render.every, cfg.render.fps, cfg.render.trail, cfg.render.round - 1)
+                               cfg.render.every, cfg.render.fps, cfg.render.trail, cfg.render.round - 1,
+                               cfg.render.crowd_from, cfg.render.receivers, cfg.seed,
+                               stills=out / f"episode{cfg.episode}-frames.png")
     except FileNotFoundError as e:
         raise ConfigError(str(e)) from None
     png = episode_png(rec, out / f"episode{cfg.episode}.png", title)
     log.info("episode %d: loss %.3f (time-averaged), %d steps, %d agents", cfg.episode, rec.cost.mean(), rec.steps,
              rec.n_agents)
-    say(f"[green]rendered[/] {anim} ({frames} frames) and {png}")
-    return {"animation": str(anim), "frames": frames, "png": str(png), "loss": float(rec.cost.mean())}
+    say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {out / f'episode{cfg.episode}-frames.png'}")
+    return {"animation": str(anim), "frames": frames, "png": str(png), "stills": str(out / f"episode{cfg.episode}-frames.png"),
+            "loss": float(rec.cost.mean())}
 
 
 def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:

@@ -16,7 +16,8 @@ import numpy as np
 
 from ..episode import EpisodeRecord
 from ..utils.io import atomic_file
-from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
+from .crowd import CrowdScene
+from .draw import (COLLISION_COLOR, BlitScene, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
 def edge_style(rec: EpisodeRecord, baseline) -> str:
@@ -45,7 +46,7 @@ def _edges(rec: EpisodeRecord, t: int, r: int, style: str, rules: np.ndarray | N
     return seg, colors
 
 
-class _Scene:
+class _Scene(BlitScene):
     """One figure whose artists are updated frame by frame (drawn once, then only moved: fast)."""
 
     def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, size: float = 5.6,
@@ -95,8 +96,8 @@ class _Scene:
         self.fig.legend(handles=handles, fontsize=6.5, loc="lower center", ncol=ncol, frameon=False)
         height = self.fig.get_size_inches()[1]
         self.fig.tight_layout(rect=(0, (0.08 + 0.16 * rows) / height, 1, 0.97))  # room for the legend's rows
-        self.fig.canvas.draw()
-        self.background = self.fig.canvas.copy_from_bbox(self.fig.bbox)  # everything that never moves
+        self.keep_background()
+
     def draw(self, t: int) -> None:
         """Show the state after ``t`` steps (t = 0: the start) with the edges used at step t (the last step's at
         the end)."""
@@ -115,21 +116,14 @@ class _Scene:
                            f"max in {self.deg_in[s]:.0f}  max out {self.deg_out[s]:.0f}  "
                            f"colliding {int(hit.sum())}")
 
-    def frame(self) -> np.ndarray:
-        """(H, W, 3) uint8 pixels of the current drawing: the background, then the moving parts over it."""
-        self.fig.canvas.restore_region(self.background)
-        for artist in self.moving:
-            self.ax.draw_artist(artist)
-        return np.asarray(self.fig.canvas.buffer_rgba())[..., :3].copy()
-
-    def close(self) -> None:
-        matplotlib_agg().close(self.fig)
-
 
 def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int = 1, fps: int = 20,
-            trail: int = 25, round_: int = 0) -> tuple[Path, int]:
+            trail: int = 25, round_: int = 0, crowd_from: int = 200, receivers: int = 40, seed: int = 0,
+            stills: Path | None = None) -> tuple[Path, int]:
     """Write the episode as a GIF (path ending .gif) or MP4 (.mp4, needs ffmpeg): frames at steps 0, every,
-    2 every, ..., T. Returns the path and the number of frames."""
+    2 every, ..., T; from ``crowd_from`` agents on as crowd frames (crowd.py: the edges of ``receivers`` sampled
+    from ``seed``). ``stills``: also a PNG of four of the frames (start, two middle, end). Returns the path and the
+    number of frames."""
     from PIL import Image
 
     if path.suffix == ".mp4" and shutil.which("ffmpeg") is None:
@@ -137,7 +131,8 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
     steps = list(range(0, rec.steps + 1, max(1, every)))
     if steps[-1] != rec.steps:
         steps.append(rec.steps)
-    scene = _Scene(rec, title, style, round_, trail)
+    scene = (CrowdScene(rec, title, style, round_, trail, receivers, seed) if rec.n_agents >= crowd_from
+             else _Scene(rec, title, style, round_, trail))
     try:
         frames = []
         for t in steps:
@@ -145,6 +140,8 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
             frames.append(scene.frame())
     finally:
         scene.close()
+    if stills is not None:
+        _stills(frames, stills)
     with atomic_file(path) as tmp:
         if path.suffix == ".mp4":
             h, w, _ = frames[0].shape
@@ -161,6 +158,20 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
             quant = [Image.fromarray(f).quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
             quant[0].save(tmp, format="GIF", save_all=True, append_images=quant[1:], duration=int(1000 / fps), loop=0)
     return path, len(frames)
+
+
+def _stills(frames: list[np.ndarray], path: Path) -> Path:
+    """Four frames of the animation (the first, two in between, the last) as one 2 x 2 PNG."""
+    from PIL import Image
+
+    picks = sorted({round(q * (len(frames) - 1)) for q in (0, 1 / 3, 2 / 3, 1)})
+    h, w, _ = frames[0].shape
+    grid = np.full((2 * h, 2 * w, 3), 255, dtype=np.uint8)
+    for n, k in enumerate(picks):
+        grid[(n // 2) * h:(n // 2 + 1) * h, (n % 2) * w:(n % 2 + 1) * w] = frames[k]
+    with atomic_file(path) as tmp:
+        Image.fromarray(grid).save(tmp, format="PNG")
+    return path
 
 
 def episode_png(rec: EpisodeRecord, path: Path, title: str) -> Path:

@@ -67,3 +67,26 @@ def save_figure(fig, path: Path) -> Path:
     finally:
         plt.close(fig)
     return path
+
+
+class BlitScene:
+    """A figure whose moving artists (``self.moving``, drawn over ``self.ax``) are redrawn frame by frame over a
+    background drawn once (blitting: fast). Subclasses build the figure, then call ``keep_background``."""
+
+    fig: object
+    ax: object
+    moving: tuple
+
+    def keep_background(self) -> None:
+        self.fig.canvas.draw()
+        self.background = self.fig.canvas.copy_from_bbox(self.fig.bbox)  # everything that never moves
+
+    def frame(self) -> np.ndarray:
+        """(H, W, 3) uint8 pixels of the current drawing: the background, then the moving parts over it."""
+        self.fig.canvas.restore_region(self.background)
+        for artist in self.moving:
+            self.ax.draw_artist(artist)
+        return np.asarray(self.fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def close(self) -> None:
+        matplotlib_agg().close(self.fig)
