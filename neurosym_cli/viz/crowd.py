@@ -37,7 +37,7 @@ class CrowdScene(BlitScene):
         self.color = np.array([to_rgba(c) for c in (group_color(rec.group) if rec.labelled
                                                     else [GROUP_COLORS[0]] * rec.n_agents)])  # (N, 4)
         self.drawn = self.total = 0
-        xlim, ylim, ratio = frame_limits(rec.pos, rec.goal, ratio=(0.75, 3.0))
+        xlim, ylim, ratio = frame_limits(rec.pos, rec.goal, ratio=(0.75, 5.0))  # fronts are long and thin
         self.fig, ax = plt.subplots(figsize=(width, width / ratio + 1.5), dpi=dpi)
         self.ax = ax
         ax.set_xlim(*xlim)
@@ -50,7 +50,7 @@ class CrowdScene(BlitScene):
         ax.add_collection(self.trails)
         self.agents = ax.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=5, c=self.color, lw=0, zorder=3,
                                  animated=True)
-        self.edges = LineCollection([], lw=0.9, zorder=4, animated=True)
+        self.edges = LineCollection([], lw=0.6, zorder=4, animated=True)
         ax.add_collection(self.edges)
         self.marked = ax.scatter([], [], s=22, facecolors="none", edgecolors="black", linewidths=0.8, zorder=5,
                                  animated=True)
@@ -105,7 +105,7 @@ class CrowdScene(BlitScene):
         if self.style == "rules":
             assert self.rules is not None
             k = self.rules[s, r, ii, jj]
-            colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.9) for x in k]).reshape(-1, 4)
+            colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.65) for x in k]).reshape(-1, 4)
         else:
             colors = np.tile(to_rgba(EDGE_COLOR, 0.7), (len(seg), 1))
             if self.style == "weights":
