@@ -574,10 +574,17 @@ def vmas_claims(v: dict) -> list[str]:
     for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
         if other in b:
             lower(pr, other, f"beyond the paper: prog-retrained better than {b[other]['label']}")
-    if not comm:
+    d = paired(v, "tf-full", "no-comm")
+    if d[0] - d[1] > 0:
+        lines.append("here hearing nobody is better than hearing everybody: at this budget the oracle has not learned "
+                     "to gain from what it hears (its training loss never went below no-comm's, table above), so "
+                     "the claims about the program compare sparse models against an oracle worse than silence "
+                     "(docs/vmas.md, 'Results').")
+    elif not comm:
+        silent = b[pr]["summary"]["max_in"]["mean"] == 0
         lines.append("where hearing nobody is as good as hearing everybody, the claims about the program say little "
-                     "about the method: the search's best program is then one that hears little or nobody, and "
-                     "every comparison is within the noise of this small budget (docs/vmas.md, 'Results').")
+                     "about the method" + (": the search's best program is then the silent one" if silent else "")
+                     + ", and every comparison is within the noise of this small budget (docs/vmas.md, 'Results').")
     return lines
 
 
