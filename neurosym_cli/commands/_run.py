@@ -150,8 +150,10 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     Inside a multirun a job's bad input fails that job alone: its line is printed, its outcome written to
     job_result.json in its Hydra directory, and the other jobs run; the sweep's summary (``sweep.py``) lists
     every job and exits non-zero when one failed."""
+    import logging
     import time
 
+    logging.raiseExceptions = False  # a log file on a full disk drops its line (the console has it), no traceback
     started = time.time() - 1.0  # file times can lag the clock by a tick
     hc = HydraConfig.get()
     sweep = hc.mode == RunMode.MULTIRUN
