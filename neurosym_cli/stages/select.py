@@ -25,10 +25,11 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__, paths
-from ..baselines import run_args
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..degrees import LEGEND
+from ..baselines import run_args
+from .reuse import SEARCH_KEYS, searched_otherwise
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
@@ -87,46 +88,6 @@ def point_name(cfg: RunConfig) -> str:
 
 def _val_file(cfg: RunConfig) -> Path:
     return Path(cfg.exp_dir) / "select" / "val" / f"{paths.baseline_label(cfg)}.json"
-
-
-SEARCH_KEYS = ("objective", "own_scores", "simplify", "coarse", "patience")
-"""the synth settings that name a program (schemes/searched.py ``search_variants``) and that selected.json records"""
-
-
-def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
-    """A line for the grid points whose program is not on disk but one of the same (K, lambda, features) is, searched
-    with other settings (a sweep of `neurosym synth` at its own schedule): the command that makes select reuse
-    them; None when there are none. Select never swaps in a program of another search silently: the pick would
-    then depend on what happened to be on disk."""
-    import shlex
-
-    found: dict[str, list[str]] = {}
-    for p in points:
-        if (paths.synth_dir(p) / "program.txt").exists():
-            continue
-        stem = f"k{p.rules}-lam{p.lam:g}-{p.features}"
-        for d in sorted((Path(cfg.exp_dir) / "synth").glob(f"{stem}*/summary.json")):
-            if d.parent.name != stem and not d.parent.name.startswith(stem + "-"):
-                continue  # k1-lam0.5-v1 is not k1-lam0.5-v10
-            try:
-                synth = read_json(d)["config"]["synth"]
-                key = " ".join(f"synth.{k}={str(synth[k]).lower() if isinstance(synth[k], bool) else synth[k]}"
-                               for k in SEARCH_KEYS if synth[k] != getattr(cfg.synth, k))
-            except (UserError, KeyError, TypeError):
-                continue  # not a summary of this version: nothing to offer
-            found.setdefault(key, []).append(d.parent.name)
-            break
-    found.pop("", None)
-    if not found:
-        return None
-    overrides, tags = max(found.items(), key=lambda kv: len(kv[1]))
-    grid = [f"select.{k}=[{','.join(f'{x:g}' if isinstance(x, float) else str(x) for x in getattr(cfg.select, k))}]"
-            for k in ("lam", "rules", "features")]
-    line = f"neurosym select {run_args(cfg)} " + " ".join(shlex.quote(g) for g in grid) + f" {overrides}"
-    ours = " ".join(f"synth.{k}={getattr(cfg.synth, k)}" for k in ("coarse", "patience"))
-    return (f"{len(tags)} of the {len(points)} grid programs exist searched with other settings ({', '.join(tags[:3])}"
-            f"{', ...' if len(tags) > 3 else ''}); select searches them again on its own schedule ({ours}); "
-            f"`{line}` selects among those instead")
 
 
 def validate(cfg: RunConfig) -> dict[str, Any]:
