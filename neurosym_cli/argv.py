@@ -9,6 +9,8 @@ import difflib
 import shlex
 from typing import Callable
 
+from .errors import cut
+
 HYDRA_FLAGS = ("-h", "--help", "--hydra-help", "--version", "-c", "--cfg", "--resolve", "-p", "--package", "-r",
                "--run", "-m", "--multirun", "-sc", "--shell-completion", "-cp", "--config-path", "-cn",
                "--config-name", "-cd", "--config-dir", "-i", "--info", "--experimental-rerun")
@@ -105,12 +107,16 @@ def _token(key: str, value: str) -> str:
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
     parser = OverridesParser.create()
-    for i in range(1, len(value) + 1):
+    for i in range(1, min(len(value), SCAN) + 1):  # a parse per prefix: quadratic, so bounded
         try:
             parser.parse_override(f"{key}={value[:i]}")
         except Exception:  # Hydra raises its own exception types for grammar errors
             return repr(value[i - 1])
-    return "its end"
+    return "its end" if len(value) <= SCAN else f"a character after its first {SCAN}"
+
+
+SCAN = 400
+"""characters of a value searched for the one Hydra's grammar stops at"""
 
 
 def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: dict[str, str]) -> str | None:
@@ -131,7 +137,8 @@ def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: 
             quoted = hydra_quoted(key.lstrip("+~"), value) if text else None
             lists = "; a list is [a,b] with its brackets closed" if value.startswith("[") else ""
             fix = f"; for the text itself quote it: {quoted}" if quoted else ""
-            return f"{a}: Hydra's override grammar cannot read {value!r} at {_token(key, value)}{lists}{fix}"
+            return (f"{cut(a)}: Hydra's override grammar cannot read {cut(repr(value))} at {_token(key, value)}{lists}"
+                    f"{cut(fix)}")
         if o.is_sweep_override() and not multirun:
             if "," not in value:
                 return f"{a}: {value} is a sweep; add -m to run one job per value"

@@ -357,7 +357,9 @@ def _main() -> None:
     bad = bad or check(rest, schemas) or pin_kernels(rest)
     rest = force_task_keys(rest, schemas)
     if bad:
-        print(f"neurosym {cmd}: error: {bad}", file=sys.stderr)
+        from neurosym_cli.errors import cut_words
+
+        print(f"neurosym {cmd}: error: {cut_words(bad)}", file=sys.stderr)  # whoever wrote it, no 20,000-character word
         raise SystemExit(2)
     if any(a in ("--help", "-h") for a in rest):  # Hydra's own: --hydra-help
         print_help(cmd, [a for a in rest if a not in ("--help", "-h")])
