@@ -17,7 +17,7 @@ import numpy as np
 from ..episode import EpisodeRecord
 from ..utils.io import atomic_file
 from .crowd import CrowdScene
-from .draw import (COLLISION_COLOR, BlitScene, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
+from .draw import (COLLISION_COLOR, edge_handles, BlitScene, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
                    matplotlib_agg, save_figure, wrap_title)
 
 def edge_style(rec: EpisodeRecord, baseline) -> str:
@@ -84,13 +84,7 @@ class _Scene(BlitScene):
         handles = [Line2D([], [], marker="o", ls="", color=colors[0], ms=5, label="agent"),
                    Line2D([], [], marker="x", ls="", color=goal_colors[0], ms=5, label="goal"),
                    Line2D([], [], marker="o", ls="", mfc="none", mec=COLLISION_COLOR, ms=8, label="collision")]
-        if style == "rules":
-            k = rec.picks.shape[-1] if rec.picks is not None else 0
-            handles += [Line2D([], [], color=RULE_COLORS[i % len(RULE_COLORS)], label=f"hears, by rule {i + 1}")
-                        for i in range(k)]
-        else:
-            label = "hears (opacity: attention weight)" if style == "weights" else "hears"
-            handles.append(Line2D([], [], color=EDGE_COLOR, label=label))
+        handles += edge_handles(style, rec.picks)
         ncol = min(len(handles), 4)
         rows = -(-len(handles) // ncol)
         self.fig.legend(handles=handles, fontsize=6.5, loc="lower center", ncol=ncol, frameon=False)

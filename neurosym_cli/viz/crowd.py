@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..episode import EpisodeRecord
-from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, frame_limits, group_color,
+from .draw import (COLLISION_COLOR, edge_handles, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, frame_limits, group_color,
                    matplotlib_agg, wrap_title)
 
 
@@ -68,13 +68,7 @@ class CrowdScene(BlitScene):
         handles += [Line2D([], [], marker="o", ls="", color="#888888", alpha=0.4, ms=3, label="goals"),
                     Line2D([], [], marker="o", ls="", mfc="none", mec="black", ms=6, label="sampled receiver"),
                     Line2D([], [], marker="o", ls="", mfc="none", mec=COLLISION_COLOR, ms=5, label="collision")]
-        if style == "rules":
-            k = rec.picks.shape[-1] if rec.picks is not None else 0
-            handles += [Line2D([], [], color=RULE_COLORS[i % len(RULE_COLORS)], label=f"hears, by rule {i + 1}")
-                        for i in range(k)]
-        else:
-            handles.append(Line2D([], [], color=EDGE_COLOR, label="hears (opacity: attention weight)"
-                                  if style == "weights" else "hears"))
+        handles += edge_handles(style, rec.picks)
         ncol = min(len(handles), 5)
         rows = -(-len(handles) // ncol)
         self.fig.legend(handles=handles, fontsize=6.5, loc="lower center", ncol=ncol, frameon=False)

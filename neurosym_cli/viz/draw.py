@@ -17,6 +17,19 @@ EDGE_COLOR = "#333333"
 COLLISION_COLOR = "#d62728"
 
 
+def edge_handles(style: str, picks) -> list:
+    """Legend entries of the edges a frame draws: one per rule ('rules'; ``picks`` (..., K) or None), else one
+    for every edge ('weights': opacity is the attention weight)."""
+    from matplotlib.lines import Line2D
+
+    if style == "rules":
+        k = picks.shape[-1] if picks is not None else 0
+        return [Line2D([], [], color=RULE_COLORS[i % len(RULE_COLORS)], label=f"hears, by rule {i + 1}")
+                for i in range(k)]
+    return [Line2D([], [], color=EDGE_COLOR, label="hears (opacity: attention weight)" if style == "weights"
+                   else "hears")]
+
+
 def matplotlib_agg():
     """pyplot on the non-interactive Agg back-end (no display needed)."""
     import matplotlib
