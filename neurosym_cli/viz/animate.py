@@ -17,8 +17,8 @@ import numpy as np
 from ..episode import EpisodeRecord
 from ..utils.io import atomic_file
 from .crowd import CrowdScene
-from .draw import (COLLISION_COLOR, edge_handles, BlitScene, EDGE_COLOR, RULE_COLORS, edge_segments, frame_limits, group_color,
-                   matplotlib_agg, save_figure, wrap_title)
+from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, BlitScene, edge_handles, edge_segments, frame_limits,
+                   group_color, matplotlib_agg, save_figure, wrap_title)
 
 def edge_style(rec: EpisodeRecord, baseline) -> str:
     """How a frame draws a provider's edges: "rules" (coloured by rule, programs), "weights" (opacity = attention

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..episode import EpisodeRecord
-from .draw import (COLLISION_COLOR, edge_handles, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, frame_limits, group_color,
-                   matplotlib_agg, wrap_title)
+from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, edge_handles, frame_limits,
+                   group_color, matplotlib_agg, wrap_title)
 
 
 def sample_receivers(n: int, count: int, seed: int) -> np.ndarray:
