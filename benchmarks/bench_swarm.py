@@ -5,7 +5,8 @@ the k nearest (dist) and everybody (tf-full), on the swarm task (tasks/swarm.py)
     python benchmarks/bench_swarm.py --sizes 100,1000 --eval-steps 5 --train-steps 10
 
 Evaluation: forward-only steps of one episode (B = 1), the mean over ``--eval-steps`` after a warm-up step, and the
-program's filter scan timed on its own (decision time per agent). Training: one batched BPTT rollout of
+program's filter scan timed on its own (decision time per agent), by the fused kernel and by the torch reference
+alternately in the same process (``--scan`` picks the one the steps and rollouts run). Training: one batched BPTT rollout of
 ``--train-steps`` steps (B = ``--batch``) with its backward pass, the time scaled to a 200-step rollout (linear in
 T). Peak memory: the process's maximum resident set (ru_maxrss), model and interpreter included, as measured; the
 estimate of policy/footprint.py beside it. A point whose estimate exceeds ``--memory-gb`` is not run: the table
@@ -27,6 +28,8 @@ import time
 
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.6, l))"
 BASELINES = ("prog", "dist", "tf-full")
+SCAN = "fused"
+"""the filter scan a point runs (``--scan``): fused (policy/scan_kernels.py, the default) or reference (torch)"""
 
 
 def _setup(baseline: str, n: int):
@@ -55,7 +58,10 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
     from neurosym_cli.rollout import rollout
     from neurosym_cli.tasks.base import Rng
 
+    from neurosym_cli.policy import scan
+
     torch.set_num_threads(1)
+    scan.FUSED = SCAN == "fused"
     env, policy, comm = _setup(baseline, n)
     gen = torch.Generator().manual_seed(0)
     out: dict = {}
@@ -71,10 +77,18 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
             if baseline == "prog":  # the filter scan on its own: the program's decision for every agent
                 obs = env.observe(state, rng)
                 ctx = CommContext(env, state, obs, rng)
-                t0 = time.perf_counter()
-                for _ in range(3):
-                    comm.picks(ctx, 0)
-                out["decision_us_per_agent"] = (time.perf_counter() - t0) / 3 / n * 1e6
+                from neurosym_cli.policy import scan
+
+                chosen = scan.FUSED
+                for key, fused in (("decision_us_per_agent", chosen), ("decision_ref_us_per_agent", False),
+                                   ("decision_us_per_agent", chosen)):  # alternating: the same load for both
+                    scan.FUSED = fused
+                    t0 = time.perf_counter()
+                    for _ in range(3):
+                        comm.picks(ctx, 0)
+                    t = (time.perf_counter() - t0) / 3 / n * 1e6
+                    out[key] = min(out.get(key, t), t)
+                scan.FUSED = chosen
                 # everything but the scan: the same steps under the picks computed once (a fixed rule)
                 fixed = [comm.picks(ctx, 0)]
 
@@ -94,6 +108,9 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
         state = env.reset(batch, gen)[0]
         rng = Rng(gen)
         policy.train()
+        warm = rollout(env, policy, comm, state, rng, 1, stats=False)  # kernels loaded, caches built
+        warm.cost.sum().backward()
+        policy.zero_grad(set_to_none=True)
         t0 = time.perf_counter()
         traj = rollout(env, policy, comm, state, rng, steps, stats=False)
         traj.cost.sum().backward()
@@ -128,9 +145,13 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=1)
     ap.add_argument("--memory-gb", type=float, default=16.0, help="skip points whose estimate exceeds this")
     ap.add_argument("--modes", default="eval,train")
+    ap.add_argument("--scan", choices=("fused", "reference"), default="fused",
+                    help="the program's filter scan: the fused kernel (default) or the torch reference")
     ap.add_argument("--table", help="print the tables of the JSON rows a previous run printed (one per line)")
     ap.add_argument("--one", nargs=3, metavar=("BASELINE", "N", "MODE"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    global SCAN
+    SCAN = args.scan
     if args.one:
         b, n, mode = args.one[0], int(args.one[1]), args.one[2]
         steps = args.eval_steps if mode == "eval" else args.train_steps
@@ -152,7 +173,7 @@ def main() -> None:
                     row["skipped"] = f"estimate {est:.1f} GB > {args.memory_gb:g} GB"
                 else:
                     cmd = [sys.executable, __file__, "--one", b, str(n), mode, "--eval-steps", str(args.eval_steps),
-                           "--train-steps", str(args.train_steps), "--batch", str(args.batch)]
+                           "--train-steps", str(args.train_steps), "--batch", str(args.batch), "--scan", args.scan]
                     r = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
                     if r.returncode != 0:
                         row["skipped"] = f"failed: {(r.stderr.strip().splitlines() or ['?'])[-1][:120]}"
@@ -199,6 +220,9 @@ def tables(rows: list[dict]) -> None:
             exp = f"{slope(fit):.2f}" if len(fit) >= 2 else "-"
             print(f"| {name} | " + " | ".join(f"{v:.3g}" for _, v in pts) + f" | {exp} |")
         print("| decision per agent (us) | " + " | ".join(f"{r['decision_us_per_agent']:.1f}" for r in dec) + " | |")
+        if all("decision_ref_us_per_agent" in r for r in dec):
+            print("| decision per agent, torch reference scan (us) | "
+                  + " | ".join(f"{r['decision_ref_us_per_agent']:.1f}" for r in dec) + " | |")
 
 
 if __name__ == "__main__":
