@@ -57,3 +57,27 @@ def uniform_rows(n: np.int64, lo: np.int64, hi: np.int64, first: np.int64, out: 
             h = _mix32(_mix32(np.uint32((i * n + j + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
             out[r, j] = (np.float32((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + np.float32(0.5)) \
                 * np.float32(1.0 / (1 << 24))
+
+
+@njit(**_JIT)
+def cell_candidates(flat: np.ndarray, order: np.ndarray, start: np.ndarray, count: np.ndarray, reach2: np.float64,
+                    first: np.ndarray, second: np.ndarray) -> np.int64:
+    """The cell list's candidate pairs (a, s), a < s, in tasks/pairs.py ``close_pairs``' order (agent a = row // 9,
+    its 9 neighbour cells in turn, each cell's agents in sorted order), kept when closer than a radius a hair above
+    the one asked (reach2: that radius squared, float64), so that torch's exact test then runs on those few. flat
+    (B N, 2) float64 positions; order (B N,) agents sorted by cell; start, count (B N 9,) each query's range in it;
+    first, second (sum of count,) int64, filled in place; returns how many were kept."""
+    m = 0
+    for row in range(start.shape[0]):
+        a = row // 9
+        ax, ay = flat[a, 0], flat[a, 1]
+        for t in range(count[row]):
+            s = order[start[row] + t]
+            if a < s:
+                dx = flat[s, 0] - ax
+                dy = flat[s, 1] - ay
+                if dx * dx + dy * dy <= reach2:
+                    first[m] = a
+                    second[m] = s
+                    m += 1
+    return m

@@ -189,6 +189,13 @@ def _compiled(pos: Tensor) -> bool:
             and not (torch.is_grad_enabled() and pos.requires_grad))
 
 
+def _numba_on(pos: Tensor) -> bool:
+    """Whether the compiled loops (tasks/pair_kernels.py) can serve this tensor: a CPU with numba."""
+    from .pair_kernels import AVAILABLE
+
+    return AVAILABLE and pos.device.type == "cpu"
+
+
 def nearest(pos: Tensor, k: int) -> Tensor:
     """(B, N, 2) positions -> (B, N, k) long: each agent's k nearest others, nearest first (self excluded), by a
     scan over chunks of receivers under no_grad (memory: one chunk of PAIR_CHUNK distances)."""
@@ -228,14 +235,35 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
         query = key[:, None] + offs[None, :]  # (B N, 9) the neighbour cells of each agent
         start = torch.searchsorted(sorted_key, query, right=False).reshape(-1)
         count = torch.searchsorted(sorted_key, query, right=True).reshape(-1) - start
-        row = torch.repeat_interleave(torch.arange(count.numel(), device=dev), count)  # (C,) candidate -> cell query
-        offset = torch.arange(row.numel(), device=dev) - (torch.cumsum(count, 0) - count)[row]
-        first, second = row // 9, order[start[row] + offset]
-        keep = first < second
-        first, second = first[keep], second[keep]
+        if _numba_on(pos):  # the candidates by the compiled loop, a hair beyond the radius; the exact test below
+            first, second = _candidates_compiled(flat, order, start, count, radius)
+        else:
+            row = torch.repeat_interleave(torch.arange(count.numel(), device=dev), count)  # (C,) candidate -> query
+            offset = torch.arange(row.numel(), device=dev) - (torch.cumsum(count, 0) - count)[row]
+            first, second = row // 9, order[start[row] + offset]
+            keep = first < second
+            first, second = first[keep], second[keep]
         d = safe_norm(flat[first] - flat[second])
         close = d <= radius if inclusive else d < radius
         return first[close], second[close]
+
+
+def _candidates_compiled(flat: Tensor, order: Tensor, start: Tensor, count: Tensor, radius: float
+                         ) -> tuple[Tensor, Tensor]:
+    """close_pairs' candidates (first < second, in its order) closer than radius (1 + 1e-4) in float64 (a superset of
+    the pairs the float32 or float64 test keeps), by tasks/pair_kernels.py ``cell_candidates``."""
+    import numpy as np
+
+    from .pair_kernels import cell_candidates
+
+    total = int(count.sum())
+    first = torch.empty(total, dtype=torch.long)
+    second = torch.empty(total, dtype=torch.long)
+    reach = radius * (1 + 1e-4)
+    m = cell_candidates(flat.detach().double().contiguous().numpy(), order.contiguous().numpy(),
+                        start.contiguous().numpy(), count.contiguous().numpy(), np.float64(reach * reach),
+                        first.numpy(), second.numpy())
+    return first[:m], second[:m]
 
 
 def within(pos: Tensor, radius: float) -> Tensor:
