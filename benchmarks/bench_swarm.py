@@ -28,6 +28,8 @@ import time
 
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.6, l))"
 BASELINES = ("prog", "dist", "tf-full")
+DENSE = ("tf-full", "hard-attn")
+"""the baselines on the dense path: hard-attn's top-k reads every logit, so its footprint is tf-full's"""
 SCAN = "fused"
 """the filter scan a point runs (``--scan``): fused (policy/scan_kernels.py, the default) or reference (torch)"""
 
@@ -38,7 +40,7 @@ def _setup(baseline: str, n: int):
 
     from neurosym_cli.config import ModelConfig
     from neurosym_cli.dsl.parser import parse
-    from neurosym_cli.policy.comm import FullComm, NearestComm, ProgramComm
+    from neurosym_cli.policy.comm import FullComm, NearestComm, ProgramComm, TopKComm
     from neurosym_cli.policy.transformer import CommTransformer
     from neurosym_cli.tasks.swarm import SwarmConfig, SwarmTask
 
@@ -46,7 +48,7 @@ def _setup(baseline: str, n: int):
     torch.manual_seed(0)
     policy = CommTransformer.for_task(env, ModelConfig())
     comm = {"prog": lambda: ProgramComm(parse(PROGRAM), env.features("v1")), "dist": lambda: NearestComm(2),
-            "tf-full": FullComm}[baseline]()
+            "tf-full": FullComm, "hard-attn": lambda: TopKComm(2)}[baseline]()
     return env, policy, comm
 
 
@@ -126,7 +128,7 @@ def estimate_gb(baseline: str, n: int, mode: str, steps: int, batch: int) -> flo
 
     cfg = SwarmConfig(name="swarm")
     return estimate_bytes(n, 1 if mode == "eval" else batch, steps if mode == "train" else 1, 1, ModelConfig(), 2,
-                          dense=baseline == "tf-full", training=mode == "train", sparse_from=cfg.sparse_from) / 2 ** 30
+                          dense=baseline in DENSE, training=mode == "train", sparse_from=cfg.sparse_from) / 2 ** 30
 
 
 def slope(points: list[tuple[int, float]]) -> float:

@@ -143,3 +143,19 @@ def test_a_compiled_round_lists_each_feature_once_with_products_after_their_fact
     prod = kinds.index(scan_kernels.PRODUCT)
     assert c.pair["pa"][prod] < prod or c.pair["pb"][prod] < prod  # its pair factor comes first
     assert c.agent == ("gx",)  # one agent feature, read by the product and the test
+
+
+@pytest.mark.parametrize("batch", [1, 3])
+def test_the_receivers_shared_among_threads_give_the_same_picks(batch, monkeypatch):
+    env = RandomCrossTask(CrossConfig(name="random-cross", group_prob=1.0, sparse_from=0))
+    state = env.reset(batch, torch.Generator().manual_seed(4))[0]
+    program = parse(PROGRAMS["v1"][1])
+    one = _picks(env, program, "v1", state, 2, True, monkeypatch)
+    monkeypatch.setattr(scan, "PARALLEL_FROM", 0)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(3)
+    try:
+        shared = _picks(env, program, "v1", state, 2, True, monkeypatch)
+    finally:
+        torch.set_num_threads(threads)
+    assert torch.equal(one, shared)

@@ -212,7 +212,8 @@ def compile_round(program: Program, round: int, fmap: FeatureMap) -> CompiledRou
 
 
 def _scan_fused(c: CompiledRound, fmap: FeatureMap, obs: Observation, keys: list[Tensor]) -> Tensor:
-    """(B, N, K) long picks by the fused kernel, one call per episode over all its receivers."""
+    """(B, N, K) long picks by the fused kernel: one call per episode, or per share of its receivers when torch may use
+    several threads (the kernel releases the GIL)."""
     pairs = obs.pairs
     b, n = obs.agent.shape[:2]
     k_rules = len(c.rules["kind"])
@@ -230,11 +231,37 @@ def _scan_fused(c: CompiledRound, fmap: FeatureMap, obs: Observation, keys: list
     for rule, key in zip(c.random, keys):
         for e, v in enumerate(key.tolist()):
             klo[e, rule], khi[e, rule] = v & 0x7FFFFFFF, (v >> 31) & 0x7FFFFFFF
-    for e in range(b):
+    radius, cossin = radius.numpy(), cossin
+    fa_np, out_np = fa.numpy(), out.numpy()
+
+    def run(e: int, first: int, stop: int) -> None:
         sk.program_scan(pos[e], np.int64(noise[e] & 0x7FFFFFFF), np.int64((noise[e] >> 31) & 0x7FFFFFFF),
-                        np.float32(pairs.noise_std), radius.numpy(), cossin, np.int64(0), fa[e].numpy(),
+                        np.float32(pairs.noise_std), radius, cossin, np.int64(first), fa_np[e],
                         c.pair["pk"], c.pair["psign"], c.pair["pa"], c.pair["pb"],
                         c.rules["kind"], klo[e], khi[e], c.rules["sf"], c.rules["sw"], c.rules["sn"],
                         c.rules["code"], c.rules["arg"], c.rules["clen"], c.rules["tf"], c.rules["tw"], c.rules["tn"],
-                        c.rules["thr"], out[e].numpy())
+                        c.rules["thr"], out_np[e, first:stop])
+
+    workers = torch.get_num_threads()
+    if workers <= 1 or b * n * n < PARALLEL_FROM:
+        for e in range(b):
+            run(e, 0, n)
+        return out
+    # the kernel releases the GIL: the threads torch may use share the receivers (the picks do not depend on it)
+    per = -(-b * n // workers)
+    parts = [(e, i, min(i + per, n)) for e in range(b) for i in range(0, n, per)]
+    list(_pool(workers).map(lambda p: run(*p), parts))
     return out
+
+
+PARALLEL_FROM = 1 << 20
+"""pairs from which the fused scan shares its receivers among torch's threads (below, one thread is quicker)"""
+_POOLS: dict = {}
+
+
+def _pool(workers: int):
+    from concurrent.futures import ThreadPoolExecutor
+
+    if workers not in _POOLS:
+        _POOLS[workers] = ThreadPoolExecutor(workers, thread_name_prefix="neurosym-scan")
+    return _POOLS[workers]

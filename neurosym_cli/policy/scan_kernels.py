@@ -71,10 +71,10 @@ def _atan2_fast(y: np.float32, x: np.float32) -> np.float32:
 
 
 @njit(inline="always", **_JIT)
-def _linear_row(frow, fa, n_pair, perr, r, ids, w, nterm, acc, mag):
-    """acc (N,) float32 <- sum_t w_t phi_t for one receiver r and every candidate, term by term as
-    dsl/interpret.py ``linear`` adds them (0 for no terms); ids < P read the pair feature rows frow (P, N), ids >= P
-    the receiver's agent features fa (A, R). Returns the bound sum_t |w_t| perr_t on the error of the fast angles;
+def _linear_row(frow, fa, n_pair, perr, i, ids, w, nterm, acc, mag):
+    """acc (N,) float32 <- sum_t w_t phi_t for receiver i and every candidate, term by term as dsl/interpret.py
+    ``linear`` adds them (0 for no terms); ids < P read the pair feature rows frow (P, N), ids >= P the agent
+    features fa (A, N) of agent i. Returns the bound sum_t |w_t| perr_t on the error of the fast angles;
     where it is not 0, mag (N,) <- sum_t |w_t phi_t|, which bounds the rounding of the sum (``_margin``)."""
     n = acc.shape[0]
     bound = np.float32(0.0)
@@ -95,7 +95,7 @@ def _linear_row(frow, fa, n_pair, perr, r, ids, w, nterm, acc, mag):
                 for j in range(n):
                     acc[j] = acc[j] + frow[f, j] * wt
         else:
-            v = np.float32(fa[f - n_pair, r] * wt)
+            v = np.float32(fa[f - n_pair, i] * wt)
             if t == 0:
                 acc[:] = v
             else:
@@ -110,7 +110,7 @@ def _linear_row(frow, fa, n_pair, perr, r, ids, w, nterm, acc, mag):
                 for j in range(n):
                     mag[j] += abs(frow[f, j] * wt)
             else:
-                v = abs(fa[f - n_pair, r] * wt)
+                v = abs(fa[f - n_pair, i] * wt)
                 for j in range(n):
                     mag[j] += v
     return bound
@@ -124,13 +124,13 @@ def _margin(bound, mag):
 
 
 @njit(inline="always", **_JIT)
-def _exact(frow, fa, n_pair, pk, psign, ox, oy, r, j, ids, w, nterm):
+def _exact(frow, fa, n_pair, pk, psign, ox, oy, i, j, ids, w, nterm):
     """The linear form of candidate j with every angle computed by atan2f: the value torch's scan computes."""
     acc = np.float32(0.0)
     for t in range(nterm):
         f = ids[t]
         if f >= n_pair:
-            v = fa[f - n_pair, r]
+            v = fa[f - n_pair, i]
         elif pk[f] == THETA:
             s = np.float32(-1.0) if psign[f] < 0 else np.float32(1.0)
             v = np.float32(math.atan2(oy[j] * s, ox[j] * s))
@@ -153,8 +153,8 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
     whose fast value is within ``_margin`` of deciding otherwise is computed again with atan2f.
 
     pos (N, 2) float32; lo, hi: the observation key's 31-bit halves; sigma: the noise std (0: none); radius (65536,),
-    cossin (65536, 2) float32: the Box-Muller tables (cos and sin side by side: one cache line per look-up); fa (A, R)
-    float32: the receivers' agent features.
+    cossin (65536, 2) float32: the Box-Muller tables (cos and sin side by side: one cache line per look-up); fa (A, N)
+    float32: the agent features of every agent.
     Pair features (P,): pk kind, psign +1/-1 (the vector's sign), pa, pb the factors' ids of a PRODUCT (ids < P:
     pair features, computed before it; ids >= P: agent features).
     Rules (K,): kind 0 argmax / 1 random, klo, khi the random rule's key halves, sf (K, T) ids, sw (K, T) float32
@@ -213,11 +213,11 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                         frow[p, j] = frow[a, j] * frow[b, j]
                 elif a < n_pair or b < n_pair:
                     row = a if a < n_pair else b
-                    v = fa[(b if a < n_pair else a) - n_pair, r]
+                    v = fa[(b if a < n_pair else a) - n_pair, i]
                     for j in range(n):
                         frow[p, j] = frow[row, j] * v
                 else:
-                    frow[p, :] = fa[a - n_pair, r] * fa[b - n_pair, r]
+                    frow[p, :] = fa[a - n_pair, i] * fa[b - n_pair, i]
         for k in range(k_rules):
             top = 0
             for s_ in range(clen[k]):
@@ -227,14 +227,14 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                     top += 1
                 elif op == TEST:
                     t = arg[k, s_]
-                    bound = _linear_row(frow, fa, n_pair, perr, r, tf[k, t], tw[k, t], tn[k, t], acc, mag)
+                    bound = _linear_row(frow, fa, n_pair, perr, i, tf[k, t], tw[k, t], tn[k, t], acc, mag)
                     th = thr[k, t]
                     for j in range(n):
                         stack[top, j] = acc[j] >= th
                     if bound > 0:  # close calls by the exact angle
                         for j in range(n):
                             if abs(acc[j] - th) <= _margin(bound, mag[j]):
-                                stack[top, j] = _exact(frow, fa, n_pair, pk, psign, ox, oy, r, j, tf[k, t], tw[k, t],
+                                stack[top, j] = _exact(frow, fa, n_pair, pk, psign, ox, oy, i, j, tf[k, t], tw[k, t],
                                                        tn[k, t]) >= th
                     top += 1
                 elif op == AND:
@@ -249,7 +249,7 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
             pick = -1
             best = np.float32(0.0)
             if kind[k] == 0:
-                bound = _linear_row(frow, fa, n_pair, perr, r, sf[k], sw[k], sn[k], acc, mag)
+                bound = _linear_row(frow, fa, n_pair, perr, i, sf[k], sw[k], sn[k], acc, mag)
                 for j in range(n):
                     if stack[0, j] and (pick < 0 or acc[j] > best):  # strictly greater: ties to the lower index
                         best = acc[j]
@@ -259,7 +259,7 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                     pick = -1
                     for j in range(n):
                         if stack[0, j] and acc[j] + _margin(bound, mag[j]) >= floor:
-                            v = _exact(frow, fa, n_pair, pk, psign, ox, oy, r, j, sf[k], sw[k], sn[k])
+                            v = _exact(frow, fa, n_pair, pk, psign, ox, oy, i, j, sf[k], sw[k], sn[k])
                             if pick < 0 or v > best:
                                 best = v
                                 pick = j
