@@ -99,7 +99,8 @@ class StressConfig:
                                                           "no-comm"])
     """the baselines to stress (those not trained in the run directory are skipped, by name)"""
     agents: list[int] = field(default_factory=lambda: [5, 10, 20, 40])
-    """agents per group (random-cross: 4 groups, so up to 160 agents), at no link failure"""
+    """agents per group, at no link failure (the default [5, 10, 20, 40] gives random-cross, 4 groups, up to 160 agents;
+    task=swarm takes thousands: a size that cannot fit is reported as where the baseline stops)"""
     failure: list[float] = field(default_factory=lambda: [0.0, 0.1, 0.3, 0.5])
     """link failure rates, at the task's own team size"""
     seeds: int = 5

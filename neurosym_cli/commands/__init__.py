@@ -10,7 +10,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
     "select": ("select", "the paper's model selection: a grid of programs, validation seeds, retrained finalists, "
                          "one pick"),
-    "stress": ("stress", "trained baselines zero-shot at other team sizes (up to 160 agents) and under link failure"),
+    "stress": ("stress", "trained baselines zero-shot at other team sizes (task=swarm: up to 10,000 agents) and under link failure"),
     "rl": ("rl", "appendix D: whom to hear as actions, by policy gradient over a grid; picks rl1 and rl2"),
     "report": ("report", "one table, plots, training curves and the loss-degree Pareto front over training seeds"),
     "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
