@@ -159,3 +159,13 @@ def test_the_receivers_shared_among_threads_give_the_same_picks(batch, monkeypat
     finally:
         torch.set_num_threads(threads)
     assert torch.equal(one, shared)
+
+
+def test_what_the_kernel_cannot_decide_as_the_reference_does_is_left_to_it():
+    env = RandomCrossTask(CrossConfig(name="random-cross", group_prob=1.0, sparse_from=0))
+    fmap = env.features("v1")
+    long_form = " + ".join(f"1.0*{f}" for f in ("dx", "dy", "d", "theta", "gx", "gy", "gd", "gtheta", "gx_dx"))
+    assert scan.compile_round(parse(f"argmax(map(-1.0*d, filter({long_form} >= 0.0, l)))"), 0,
+                              env.features("v2")) is None  # nine terms
+    assert scan.compile_round(parse("argmax(map(1e20*d, filter(true, l)))"), 0, fmap) is None
+    assert scan.compile_round(parse("argmax(map(1e9*d, filter(true, l)))"), 0, fmap) is not None

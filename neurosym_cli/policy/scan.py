@@ -31,6 +31,10 @@ from ..tasks.features import FeatureMap
 from ..tasks.pairs import Offsets, _box_muller_tables, rows_per_chunk, uniform_rows
 from . import scan_kernels as sk
 
+MAX_TERMS = 8
+"""terms of a linear form the fused kernel takes (its close-call margin covers their roundings)"""
+MAX_WEIGHT = 1e15
+"""the largest score weight the fused kernel takes (bounded features times it stay far from 1e30)"""
 FUSED = True
 """take the fused kernel where it applies (False: always the reference scan; benchmarks and tests compare them)"""
 
@@ -97,6 +101,10 @@ def compile_round(program: Program, round: int, fmap: FeatureMap) -> CompiledRou
         if name not in vocab.names:
             return None
         if vocab.agent_level(name):
+            src = vocab.get(name).source  # computed below from s_i alone: only a source that reads s_i says so
+            if src is None or not (src.field == "agent" or (src.product and all(
+                    f in vocab.names and vocab.agent_level(f) and ident(f) is not None for f in src.product))):
+                return None
             if name not in agent:
                 agent.append(name)
             return -1 - agent.index(name)  # agent ids are remapped to P + a once P is known
@@ -121,6 +129,8 @@ def compile_round(program: Program, round: int, fmap: FeatureMap) -> CompiledRou
         return pair_ids[name]
 
     def linear(f: Linear) -> list[tuple[int, float]] | None:
+        if len(f.terms) > MAX_TERMS:
+            return None  # scan_kernels._margin bounds the roundings of up to MAX_TERMS terms
         out = []
         for name, w in f.terms:
             k = ident(name)
@@ -153,6 +163,10 @@ def compile_round(program: Program, round: int, fmap: FeatureMap) -> CompiledRou
         return True
 
     for r in rules:
+        if not isinstance(r, (ArgMaxRule, RandomRule)):
+            return None  # the reference names what it is not
+        if isinstance(r, ArgMaxRule) and any(abs(w) > MAX_WEIGHT for _, w in r.score.terms):
+            return None  # scores near the reference's -1e30 sentinel: its arithmetic decides those
         code: list = []
         ts: list = []
         thr: list = []

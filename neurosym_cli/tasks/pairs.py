@@ -193,7 +193,7 @@ def _numba_on(pos: Tensor) -> bool:
     """Whether the compiled loops (tasks/pair_kernels.py) can serve this tensor: a CPU with numba."""
     from .pair_kernels import AVAILABLE
 
-    return AVAILABLE and pos.device.type == "cpu"
+    return AVAILABLE and pos.device.type == "cpu" and pos.dtype in (torch.float32, torch.float64)
 
 
 def nearest(pos: Tensor, k: int) -> Tensor:
