@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ..tasks.pair_kernels import _JIT, AVAILABLE, _mix32, njit
+from ..tasks.pair_kernels import _JIT, AVAILABLE, _bits, njit
 
 __all__ = ["AVAILABLE", "program_scan", "X", "Y", "D", "THETA", "PRODUCT", "THETA_EXACT", "TRUE", "TEST", "AND", "OR"]
 
@@ -181,9 +181,8 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
             ox[j] = pos[j, 0] - xi
             oy[j] = pos[j, 1] - yi
         if sigma > 0:  # tasks/pair_kernels.py noisy_rows: the same hash of (key, i N + j)
-            base = i * n + lo
             for j in range(n):
-                h = _mix32(_mix32(np.uint32((base + j) & 0xFFFFFFFF)) ^ np.uint32(hi))
+                h = _bits(i * n + j, lo, hi)
                 rad = radius[h >> np.uint32(16)]
                 q = h & np.uint32(0xFFFF)
                 ox[j] = ox[j] + sigma * (rad * cossin[q, 0])
@@ -264,9 +263,8 @@ def program_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                                 best = v
                                 pick = j
             else:  # tasks/pairs.py counter_uniform of the rule's key and i N + j (every j: a loop without branches)
-                base = i * n + klo[k]
                 for j in range(n):
-                    h = _mix32(_mix32(np.uint32((base + j) & 0xFFFFFFFF)) ^ np.uint32(khi[k]))
+                    h = _bits(i * n + j, klo[k], khi[k])
                     acc[j] = (np.float32((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + np.float32(0.5)) * inv24
                 for j in range(n):
                     if stack[0, j] and (pick < 0 or acc[j] > best):

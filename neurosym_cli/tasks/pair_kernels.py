@@ -31,6 +31,12 @@ def _mix32(x: np.uint32) -> np.uint32:
     return x ^ (x >> np.uint32(16))
 
 
+@njit(inline="always", **_JIT)
+def _bits(counter, lo, hi) -> np.uint32:
+    """tasks/pairs.py ``counter_bits``: 32 random bits of an int64 counter i N + j under a key's 31-bit halves."""
+    return _mix32(_mix32(np.uint32((counter + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
+
+
 @njit(**_JIT)
 def noisy_rows(pos: np.ndarray, lo: np.int64, hi: np.int64, first: np.int64, sigma: np.float32,
                radius: np.ndarray, cos: np.ndarray, sin: np.ndarray, out: np.ndarray) -> None:
@@ -41,7 +47,7 @@ def noisy_rows(pos: np.ndarray, lo: np.int64, hi: np.int64, first: np.int64, sig
         i = first + r
         xi, yi = pos[i, 0], pos[i, 1]
         for j in range(n):
-            h = _mix32(_mix32(np.uint32((i * n + j + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
+            h = _bits(i * n + j, lo, hi)
             rad = radius[h >> np.uint32(16)]
             k = h & np.uint32(0xFFFF)
             out[r, j, 0] = (pos[j, 0] - xi) + sigma * (rad * cos[k])
@@ -54,7 +60,7 @@ def uniform_rows(n: np.int64, lo: np.int64, hi: np.int64, first: np.int64, out: 
     for r in range(out.shape[0]):
         i = first + r
         for j in range(n):
-            h = _mix32(_mix32(np.uint32((i * n + j + lo) & 0xFFFFFFFF)) ^ np.uint32(hi))
+            h = _bits(i * n + j, lo, hi)
             out[r, j] = (np.float32((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + np.float32(0.5)) \
                 * np.float32(1.0 / (1 << 24))
 

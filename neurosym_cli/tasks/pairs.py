@@ -183,10 +183,7 @@ class Offsets:
 
 def _compiled(pos: Tensor) -> bool:
     """Whether ``Offsets.rows`` runs the compiled kernel: float32 on a CPU, numba present, no gradient wanted."""
-    from .pair_kernels import AVAILABLE
-
-    return (AVAILABLE and pos.device.type == "cpu" and pos.dtype == torch.float32
-            and not (torch.is_grad_enabled() and pos.requires_grad))
+    return _numba_on(pos) and pos.dtype == torch.float32 and not (torch.is_grad_enabled() and pos.requires_grad)
 
 
 def _numba_on(pos: Tensor) -> bool:
