@@ -1,5 +1,6 @@
-"""One evaluation episode recorded step by step, for pictures: positions, whom each agent hears (the mask, the
-attention weights actually used, and for a program which rule chose each edge), the loss and collisions.
+"""One evaluation episode recorded step by step, for pictures: positions, whom each agent hears (as a list of
+edges with the attention weights actually used, and for a program the rule that chose each edge; no N x N array,
+so a 10,000-agent swarm records), the loss and collisions.
 
 The episode is one of the evaluation protocol's (``evaluation.py``): episode ``index`` counts through the test
 episodes of evaluation seed 0, then seed 1, ..., with the same generator as in `neurosym eval`, so a picture
@@ -13,10 +14,110 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .tasks.base import Rng, Task, TaskState, pairwise_distances, require
+from .tasks.base import Rng, Task, TaskState, require
+from .tasks.pairs import close_pairs
 from .policy.comm import CommContext, CommProvider
-from .policy.transformer import CommTransformer
+from .policy.transformer import CommTransformer, Heard
 from .utils.seeding import STREAM_EVAL, generator
+
+
+@dataclass
+class Edges:
+    """Whom each agent heard over an episode, one row per edge (agent i hears agent j at step t, round r), instead
+    of (T, R, N, N) masks and weights: a 1,000-agent swarm's 200 steps of 2 rounds under K = 5 rules hold at most
+    2 M edges (about 26 MB) where the dense masks and weights took 2.4 GB, and 10,000 agents' dense ones would not
+    fit in memory at all. The rows of one (t, r) are sorted by i, then j (the order of ``np.nonzero`` on its mask)."""
+
+    n: int  # agents N
+    rounds: int  # communication rounds R
+    start: np.ndarray  # (T R + 1,) int64: the rows of step t, round r are start[t R + r] : start[t R + r + 1]
+    recv: np.ndarray  # (E,) int32: the listening agent i
+    sent: np.ndarray  # (E,) int32: the heard agent j
+    weight: np.ndarray  # (E,) float32: the attention weight a_ij actually used
+    rule: np.ndarray | None  # (E,) int8: the first rule that picked j for i (-1: none); None when no program ran
+
+    @property
+    def steps(self) -> int:
+        return (len(self.start) - 1) // self.rounds
+
+    def rows(self, t: int, r: int) -> slice:
+        """The rows of step t, round r."""
+        k = t * self.rounds + r
+        return slice(int(self.start[k]), int(self.start[k + 1]))
+
+    def at(self, t: int, r: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, a_ij), each (E_tr,), of step t, round r."""
+        s = self.rows(t, r)
+        return self.recv[s], self.sent[s], self.weight[s]
+
+    def count(self, t: int, r: int) -> int:
+        s = self.rows(t, r)
+        return s.stop - s.start
+
+    def mask(self, t: int, r: int) -> np.ndarray:
+        """(N, N) bool: i hears j at step t, round r (a small team's picture; N^2 bytes)."""
+        out = np.zeros((self.n, self.n), dtype=bool)
+        i, j, _ = self.at(t, r)
+        out[i, j] = True
+        return out
+
+    def weights(self, t: int, r: int) -> np.ndarray:
+        """(N, N) float32: a_ij at step t, round r, zero outside the mask (rows sum to 1, or 0 for nobody heard)."""
+        out = np.zeros((self.n, self.n), dtype=np.float32)
+        i, j, w = self.at(t, r)
+        out[i, j] = w
+        return out
+
+    def rule_at(self, t: int, r: int) -> np.ndarray | None:
+        """(E_tr,) the rule of each edge of step t, round r (aligned with ``at``); None when no program ran."""
+        return None if self.rule is None else self.rule[self.rows(t, r)]
+
+    def of(self, t: int, r: int, receivers: np.ndarray) -> np.ndarray:
+        """(E_s,) the row numbers of step t, round r whose listener is one of ``receivers`` (S,) sorted, in order."""
+        s = self.rows(t, r)
+        return s.start + np.flatnonzero(np.isin(self.recv[s], receivers, assume_unique=False))
+
+    def degrees(self) -> tuple[np.ndarray, np.ndarray]:
+        """(T,) max in-degree and (T,) max out-degree over agents, mean over rounds (as the evaluation)."""
+        t_n = self.steps
+        din, dout = np.zeros(t_n), np.zeros(t_n)
+        for t in range(t_n):
+            for r in range(self.rounds):
+                i, j, _ = self.at(t, r)
+                din[t] += np.bincount(i, minlength=self.n).max(initial=0)
+                dout[t] += np.bincount(j, minlength=self.n).max(initial=0)
+        return din / self.rounds, dout / self.rounds
+
+
+def round_edges(heard, picks: torch.Tensor | None) -> tuple[np.ndarray, ...]:
+    """The edges of one round of agent batch 0, from what the policy reports it heard (``PolicyOutput.heard[r]``:
+    a sparse path's ``Heard``, or the dense path's (weights, mask) (B, N, N)) and the picks (B, N, K) the
+    provider handed out (None: no program) -> (i, j, a_ij, rule) (E,) each, sorted by i then j; rule is -1 without
+    picks."""
+    if isinstance(heard, Heard):  # nothing N x N: the valid picks are the edges, and the rule is the pick's
+        valid = heard.valid[0].cpu().numpy()
+        i, k = np.nonzero(valid)
+        j = heard.picks[0].cpu().numpy()[i, k]
+        w = heard.weights[0].detach().float().cpu().numpy()[i, k]
+        order = np.lexsort((j, i))
+        return i[order], j[order], w[order], k[order]
+    attn, mask = heard
+    i, j = np.nonzero(mask[0].cpu().numpy())
+    w = attn[0].detach().float().cpu().numpy()[i, j]
+    rule = np.full(len(i), -1)
+    if picks is not None and len(i):  # the first rule whose pick for i is j (a repeat counts once)
+        hit = picks[0].cpu().numpy()[i] == j[:, None]  # (E, K)
+        rule = np.where(hit.any(1), hit.argmax(1), -1)
+    return i, j, w, rule
+
+
+def stack_edges(n: int, rounds: int, per_round: list[tuple[np.ndarray, ...]], programs: bool) -> Edges:
+    """Edges from ``round_edges`` of every (step, round), step-major."""
+    sizes = [len(e[0]) for e in per_round]
+    cat = [np.concatenate([e[c] for e in per_round]) if per_round else np.zeros(0) for c in range(4)]
+    return Edges(n=n, rounds=rounds, start=np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
+                 recv=cat[0].astype(np.int32), sent=cat[1].astype(np.int32), weight=cat[2].astype(np.float32),
+                 rule=cat[3].astype(np.int8) if programs else None)
 
 
 @dataclass
@@ -27,9 +128,8 @@ class EpisodeRecord:
     inputs: np.ndarray  # (T, N, Ds) each agent's private input s_i at step t (read by own-state features)
     goal: np.ndarray  # (N, 2) each agent's goal (formation) or (G, 2) the goal set (unlabeled)
     group: np.ndarray  # (N,) group of each agent (zeros for unlabeled)
-    mask: np.ndarray  # (T, R, N, N) bool: agent i hears agent j at step t, round r
-    attn: np.ndarray  # (T, R, N, N) attention weights actually used (rows sum to 1, or 0 when i hears nobody)
-    picks: np.ndarray | None  # (T, R, N, K) the agent rule k picked for i (-1: nobody); programs only
+    edges: Edges  # whom each agent heard at each step and round, with the weights actually used
+    picks: np.ndarray | None  # (T, R, N, K) int32 the agent rule k picked for i (-1: nobody); programs only
     cost: np.ndarray  # (T,) loss of each step, summed over agents
     collide: np.ndarray  # (T, N) bool: after step t, the agent is closer than the collision distance to another
     labelled: bool  # formation (each agent its own goal) or unlabeled goals
@@ -42,24 +142,13 @@ class EpisodeRecord:
     def n_agents(self) -> int:
         return self.pos.shape[1]
 
+    @property
+    def rounds(self) -> int:
+        return self.edges.rounds
+
     def degrees(self) -> tuple[np.ndarray, np.ndarray]:
         """(T,) max in-degree and (T,) max out-degree over agents, mean over rounds (as the evaluation)."""
-        m = self.mask  # integer counts of the bool mask: no (T, R, N, N) float copy of a large team's
-        return m.sum(3).max(2).mean(1), m.sum(2).max(2).mean(1)
-
-    def rule_of_edge(self, receivers: np.ndarray | None = None) -> np.ndarray | None:
-        """(T, R, N, N) int: the first rule that picked j for i (-1: no edge); only the rows of ``receivers`` (S,)
-        when given, (T, R, S, N); None when no program ran."""
-        if self.picks is None:
-            return None
-        picks = self.picks if receivers is None else self.picks[:, :, receivers]
-        t, r, n, k = picks.shape
-        out = np.full((t, r, n, self.n_agents), -1, dtype=np.int64)
-        for rule in range(k - 1, -1, -1):  # the first rule that picked an agent names the edge
-            p = picks[..., rule]
-            tt, rr, ii = np.nonzero(p >= 0)
-            out[tt, rr, ii, p[tt, rr, ii]] = rule
-        return out
+        return self.edges.degrees()
 
 
 class _Recorder:
@@ -92,6 +181,17 @@ def protocol_episode(env: Task, index: int, max_seeds: int = 1000) -> tuple[Task
     raise ValueError(f"episode {index} is beyond {max_seeds} evaluation seeds")
 
 
+def _colliding(pos: torch.Tensor, dist: float) -> torch.Tensor:
+    """(N,) bool: agent of batch 0 closer than ``dist`` to another, by the cell list (no N x N distances)."""
+    n = pos.shape[1]
+    out = torch.zeros(n, dtype=torch.bool)
+    if dist > 0:
+        first, second = close_pairs(pos[:1], dist)
+        out[first.cpu()] = True
+        out[second.cpu()] = True
+    return out
+
+
 @torch.no_grad()
 def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState,
                    gen: torch.Generator, device: torch.device, horizon: int | None = None) -> EpisodeRecord:
@@ -102,7 +202,7 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
     rec = _Recorder(comm)
     rng = Rng([gen], device)
     state = state.to(device)
-    pos, inputs, masks, attns, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], [], []
+    pos, inputs, edges, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], []
     dist_c = float(getattr(getattr(env, "cfg", None), "collision_dist", 0.0))
     for t in range(horizon):
         obs = env.observe(state, rng)
@@ -113,18 +213,17 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
         state = env.step(state, out.action)
         costs.append(float(env.cost(state, out.action)[0]))
         pos.append(state.pos[0].cpu())
-        masks.append(torch.stack([m[0] for m in out.masks]).cpu())
-        attns.append(torch.stack([a[0] for a in out.attn]).cpu())
-        if rec.picked and len(rec.picked) == len(out.masks):
-            picks.append(torch.stack([p[0] for p in rec.picked]).cpu())
-        d = pairwise_distances(state.pos)[0]  # (N, N), +inf on the diagonal
-        collide.append((d < dist_c).any(-1).cpu())
+        programs = bool(rec.picked) and len(rec.picked) == len(out.heard)
+        edges += [round_edges(h, rec.picked[r] if programs else None) for r, h in enumerate(out.heard)]
+        if programs:
+            picks.append(torch.stack([p[0] for p in rec.picked]).to(torch.int32).cpu())
+        collide.append(_colliding(state.pos, dist_c))
     policy.train(was_training)
     scene = require(env, "scene", "drawing an episode")(state)
     return EpisodeRecord(
         pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=scene.goal.cpu().numpy(),
         group=scene.group.cpu().numpy(),
-        mask=torch.stack(masks).numpy(), attn=torch.stack(attns).float().numpy(),
+        edges=stack_edges(state.n_agents, len(out.heard), edges, programs=len(picks) == horizon),
         picks=torch.stack(picks).numpy() if len(picks) == horizon else None,
         cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=scene.labelled,
     )

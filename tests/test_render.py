@@ -60,18 +60,26 @@ def test_soft_attention_rows_sum_to_one_and_program_rows_have_at_most_k():
     env, policy = _setup()
     state, gen, _ = protocol_episode(env, 1)  # both groups: N = 8
     full = record_episode(env, policy, FullComm(), state, gen, torch.device("cpu"))
-    assert full.attn.shape == (12, 1, 8, 8)
-    assert np.allclose(full.attn.sum(-1), 1.0, atol=1e-5)
-    assert np.all(np.diagonal(full.attn, axis1=-2, axis2=-1) == 0)
+    assert full.steps == 12 and full.rounds == 1 and full.edges.rule is None
+    attn = np.stack([full.edges.weights(t, 0) for t in range(12)])  # (T, N, N)
+    assert attn.shape == (12, 8, 8)
+    assert np.allclose(attn.sum(-1), 1.0, atol=1e-5)
+    assert np.all(np.diagonal(attn, axis1=-2, axis2=-1) == 0)
     state, gen, _ = protocol_episode(env, 1)
     prog = record_episode(env, policy, _program(), state, gen, torch.device("cpu"))
-    nonzero = (prog.attn > 0).sum(-1)
+    attn = np.stack([prog.edges.weights(t, 0) for t in range(12)])
+    nonzero = (attn > 0).sum(-1)
     assert nonzero.max() <= 2 and nonzero.max() >= 1
-    assert np.allclose(prog.attn.sum(-1)[nonzero > 0], 1.0, atol=1e-5)
-    # every edge of the mask is named by the rule that chose it, and only edges are
-    rules = prog.rule_of_edge()
-    assert np.array_equal(rules >= 0, prog.mask)
-    assert set(np.unique(rules)) <= {-1, 0, 1}
+    assert np.allclose(attn.sum(-1)[nonzero > 0], 1.0, atol=1e-5)
+    # every edge is named by the rule whose pick it is, and a rule's pick is an edge
+    for t in range(12):
+        i, j, _ = prog.edges.at(t, 0)
+        k = prog.edges.rule_at(t, 0)
+        assert set(k.tolist()) <= {0, 1}
+        assert np.array_equal(prog.picks[t, 0, i, k], j)
+        picked = prog.picks[t, 0]
+        ii, kk = np.nonzero(picked >= 0)
+        assert prog.edges.mask(t, 0)[ii, picked[ii, kk]].all()
     din, dout = prog.degrees()
     assert np.all(din <= 2) and din.shape == (12,)
 
@@ -193,8 +201,9 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
         for t in range(4):
             scene.draw(t)
             s = min(t, 2)
-            assert scene.drawn == rec.mask[s, 0][scene.recv].sum() <= 25 * 2  # K = 2 rules
-            assert scene.total == rec.mask[s, 0].sum() > 4 * scene.drawn
+            mask = rec.edges.mask(s, 0)
+            assert scene.drawn == mask[scene.recv].sum() <= 25 * 2  # K = 2 rules
+            assert scene.total == mask.sum() > 4 * scene.drawn
             assert len(scene.edges.get_segments()) == scene.drawn
     finally:
         scene.close()
@@ -203,3 +212,48 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
     im = Image.open(path)
     assert frames == im.n_frames == 4 and im.size[0] > 600
     assert Image.open(tmp_path / "swarm-frames.png").size == (2 * im.size[0], 2 * im.size[1])
+
+
+def test_the_sparse_and_dense_paths_record_the_same_edges():
+    """A large team's round (a ``Heard``: picks, no N x N array) and the same round on the dense path give the same
+    edges, weights and rules, and the (N, N) views of the edges are the policy's own mask and weights."""
+    from neurosym_cli.config import ModelConfig
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.episode import round_edges, stack_edges
+    from neurosym_cli.policy import CommTransformer
+    from neurosym_cli.policy.comm import CommContext, ProgramComm
+    from neurosym_cli.policy.transformer import Heard
+    from neurosym_cli.tasks.base import Observation, Rng
+    from neurosym_cli.tasks.random_cross import CrossConfig, RandomCrossTask
+
+    env = RandomCrossTask(CrossConfig(name="random-cross", group_prob=1.0, sparse_from=0))
+    state = env.reset(1, torch.Generator().manual_seed(0))[0]
+    torch.manual_seed(0)
+    policy = CommTransformer.for_task(env, ModelConfig(dropout=0.0))
+    comm = ProgramComm(parse("argmax(map(-1.0*d, filter(true, l)))\nargmax(map(1.0*dx, filter(d <= 3.0, l)))\n"),
+                       env.features("v1"))
+    obs = env.observe(state, Rng(torch.Generator().manual_seed(1)))
+    got = []
+    for o in (obs, Observation(obs.agent, obs.pairs.dense())):
+        ctx = CommContext(env, state, o, Rng(torch.Generator().manual_seed(2)))
+        picks = []
+        with torch.no_grad():
+            out = policy(o, lambda lg, r: comm.select(ctx, lg, r),
+                         lambda r: picks.append(comm.picks(ctx, r)) or picks[-1])
+        got.append((out, round_edges(out.heard[0], picks[0]), picks[0]))
+    (sparse, e_sparse, picks), (dense, e_dense, _) = got
+    assert isinstance(sparse.heard[0], Heard) and not isinstance(dense.heard[0], Heard)
+    for a, b in zip(e_sparse, e_dense):
+        assert np.array_equal(a, b)
+    i, j, w, rule = e_sparse
+    assert len(i) >= 40 and set(rule.tolist()) == {0, 1}
+    assert np.array_equal(picks[0].numpy()[i, rule], j)  # an edge's rule picked it
+    edges = stack_edges(40, 1, [e_sparse, e_dense], programs=True)
+    assert edges.steps == 2 and edges.count(1, 0) == len(i)
+    assert np.array_equal(edges.mask(0, 0), dense.masks[0][0].numpy())
+    assert np.array_equal(edges.weights(1, 0), dense.attn[0][0].numpy())
+    din, dout = edges.degrees()
+    deg = dense.masks[0][0].numpy()
+    assert din[0] == deg.sum(1).max() and dout[1] == deg.sum(0).max()
+    rows = edges.of(1, 0, np.array([3, 7]))
+    assert set(edges.recv[rows].tolist()) == {3, 7} and np.all(rows >= edges.count(0, 0))

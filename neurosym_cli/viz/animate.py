@@ -28,21 +28,22 @@ def edge_style(rec: EpisodeRecord, baseline) -> str:
     return "weights" if baseline.soft_attention else "mask"
 
 
-def _edges(rec: EpisodeRecord, t: int, r: int, style: str, rules: np.ndarray | None):
+def _edges(rec: EpisodeRecord, t: int, r: int, style: str):
     """Segments (E, 2, 2) and RGBA colours (E, 4) of step t, round r."""
     from matplotlib.colors import to_rgba
 
-    seg, ij = edge_segments(rec.pos[t], rec.mask[t, r], shrink=0.04)
+    i, j, w = rec.edges.at(t, r)
+    seg = edge_segments(rec.pos[t], i, j, shrink=0.04)
     if not len(seg):
         return seg, np.zeros((0, 4))
     if style == "rules":
-        assert rules is not None
-        k = rules[t, r, ij[:, 0], ij[:, 1]]
+        k = rec.edges.rule_at(t, r)
+        assert k is not None
         colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.85) for x in k])
     else:
         colors = np.tile(to_rgba(EDGE_COLOR, 0.6), (len(seg), 1))
         if style == "weights":  # soft attention: what fraction of i's attention goes to j
-            colors[:, 3] = np.clip(rec.attn[t, r, ij[:, 0], ij[:, 1]], 0.02, 1.0)
+            colors[:, 3] = np.clip(w, 0.02, 1.0)
     return seg, colors
 
 
@@ -56,7 +57,6 @@ class _Scene(BlitScene):
 
         plt = matplotlib_agg()
         self.rec, self.style, self.round, self.trail = rec, style, round_, trail
-        self.rules = rec.rule_of_edge() if style == "rules" else None
         self.deg_in, self.deg_out = rec.degrees()
         xlim, ylim, ratio = frame_limits(rec.pos, rec.goal)
         self.fig, ax = plt.subplots(figsize=(max(size, size * ratio ** 0.5), size / ratio ** 0.5 + 1.2), dpi=dpi)
@@ -99,7 +99,7 @@ class _Scene(BlitScene):
         s = min(t, rec.steps - 1)  # communication of the step being taken (the last one at the end)
         lo = max(0, t - self.trail)
         self.trails.set_segments([rec.pos[lo:t + 1, i] for i in range(rec.n_agents)] if t > 0 else [])
-        seg, colors = _edges(rec, s, self.round, self.style, self.rules)
+        seg, colors = _edges(rec, s, self.round, self.style)
         self.edges.set_segments(seg)
         self.edges.set_color(colors)
         self.agents.set_offsets(rec.pos[t])

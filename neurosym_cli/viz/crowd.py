@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..episode import EpisodeRecord
-from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, edge_handles, frame_limits,
-                   group_color, matplotlib_agg, wrap_title)
+from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, edge_handles, edge_segments,
+                   frame_limits, group_color, matplotlib_agg, wrap_title)
 
 
 def sample_receivers(n: int, count: int, seed: int) -> np.ndarray:
@@ -33,7 +33,6 @@ class CrowdScene(BlitScene):
         plt = matplotlib_agg()
         self.rec, self.style, self.round, self.trail = rec, style, round_, trail
         self.recv = sample_receivers(rec.n_agents, receivers, seed)  # (S,)
-        self.rules = rec.rule_of_edge(self.recv) if style == "rules" else None  # (T, R, S, N)
         self.color = np.array([to_rgba(c) for c in (group_color(rec.group) if rec.labelled
                                                     else [GROUP_COLORS[0]] * rec.n_agents)])  # (N, 4)
         self.drawn = self.total = 0
@@ -92,18 +91,17 @@ class CrowdScene(BlitScene):
         """Segments (E, 2, 2) from the heard agent to each sampled receiver at step s, and colours (E, 4)."""
         from matplotlib.colors import to_rgba
 
-        rec, r = self.rec, self.round
-        sub = rec.mask[s, r][self.recv]  # (S, N) bool
-        ii, jj = np.nonzero(sub)
-        seg = np.stack([pos[jj], pos[self.recv[ii]]], 1)
+        e = self.rec.edges
+        rows = e.of(s, self.round, self.recv)  # (E_s,) the sampled receivers' edges
+        seg = edge_segments(pos, e.recv[rows], e.sent[rows])
         if self.style == "rules":
-            assert self.rules is not None
-            k = self.rules[s, r, ii, jj]
-            colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.65) for x in k]).reshape(-1, 4)
+            assert e.rule is not None
+            colors = np.array([to_rgba(RULE_COLORS[int(x) % len(RULE_COLORS)], 0.65)
+                               for x in e.rule[rows]]).reshape(-1, 4)
         else:
             colors = np.tile(to_rgba(EDGE_COLOR, 0.7), (len(seg), 1))
             if self.style == "weights":
-                colors[:, 3] = np.clip(rec.attn[s, r, self.recv[ii], jj], 0.05, 1.0)
+                colors[:, 3] = np.clip(e.weight[rows], 0.05, 1.0)
         return seg, colors
 
     def draw(self, t: int) -> None:
@@ -119,7 +117,7 @@ class CrowdScene(BlitScene):
         seg, colors = self._edges(s, pos)
         self.edges.set_segments(seg)
         self.edges.set_color(colors)
-        self.drawn, self.total = len(seg), int(rec.mask[s, self.round].sum())
+        self.drawn, self.total = len(seg), rec.edges.count(s, self.round)
         self.marked.set_offsets(pos[self.recv] if len(self.recv) else np.zeros((0, 2)))
         hit = rec.collide[t - 1] if t > 0 else np.zeros(rec.n_agents, bool)
         self.rings.set_offsets(pos[hit] if hit.any() else np.zeros((0, 2)))

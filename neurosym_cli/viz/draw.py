@@ -61,14 +61,14 @@ def wrap_title(title: str) -> str:
     return f"{head}:\n{tail}" if sep else title
 
 
-def edge_segments(pos: np.ndarray, mask: np.ndarray, shrink: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """pos (N, 2), mask (N, N) bool (i hears j) -> segments (E, 2, 2) from j to i, and their (i, j) (E, 2)."""
-    ii, jj = np.nonzero(mask)
-    seg = np.stack([pos[jj], pos[ii]], 1)  # from the speaker j to the listener i
+def edge_segments(pos: np.ndarray, i: np.ndarray, j: np.ndarray, shrink: float = 0.0) -> np.ndarray:
+    """pos (N, 2), edges i hears j (E,) each -> segments (E, 2, 2) from j to i, ``shrink`` of their length cut
+    off each end."""
+    seg = np.stack([pos[j], pos[i]], 1).reshape(-1, 2, 2)  # from the speaker j to the listener i
     if shrink and len(seg):
         d = seg[:, 1] - seg[:, 0]
         seg = seg + np.stack([d * shrink, -d * shrink], 1)
-    return seg, np.stack([ii, jj], 1)
+    return seg
 
 
 def save_figure(fig, path: Path) -> Path:

@@ -36,8 +36,8 @@ def _order(rec: EpisodeRecord) -> np.ndarray:
 def attention_panel(ax, rec: EpisodeRecord, step: int, round_: int, label: str):
     """One N x N map: row i = listener, column j = heard agent, colour = attention weight a_ij actually used."""
     order = _order(rec)
-    a = rec.attn[step, round_][np.ix_(order, order)]
-    m = rec.mask[step, round_]  # in- and out-degrees do not depend on the order
+    a = rec.edges.weights(step, round_)[np.ix_(order, order)]
+    m = rec.edges.mask(step, round_)  # in- and out-degrees do not depend on the order
     im = ax.imshow(a, cmap="magma_r", vmin=0.0, vmax=1.0, interpolation="nearest")  # weights lie in [0, 1]
     if not m.any():
         ax.text(0.5, 0.5, "nobody hears anybody\nat this step", ha="center", va="center", transform=ax.transAxes,
@@ -61,7 +61,7 @@ def attention_panel(ax, rec: EpisodeRecord, step: int, round_: int, label: str):
 def attention_maps(recs: Sequence[tuple[str, EpisodeRecord]], step: int, path: Path, title: str) -> Path:
     """Attention maps of several baselines at one step (one map per round), with a shared colour bar each."""
     plt = matplotlib_agg()
-    rounds = recs[0][1].mask.shape[1]
+    rounds = recs[0][1].rounds
     cols = len(recs) * rounds
     fig, axes = plt.subplots(1, cols, figsize=(3.6 * cols + 0.6, 4.0), dpi=110, squeeze=False)
     for k, (label, rec) in enumerate(recs):
@@ -126,7 +126,8 @@ def _scene(ax, rec: EpisodeRecord, step: int | None = None, round_: int = 0, gro
         for i in range(rec.n_agents):
             ax.plot(rec.pos[:, i, 0], rec.pos[:, i, 1], color=colors[i], lw=0.7, alpha=0.6)
     if step is not None:
-        seg, _ = edge_segments(rec.pos[step], rec.mask[step, round_], shrink=0.03)
+        i, j, _ = rec.edges.at(step, round_)
+        seg = edge_segments(rec.pos[step], i, j, shrink=0.03)
         from matplotlib.collections import LineCollection
 
         ax.add_collection(LineCollection(seg, colors="#333333", lw=0.7, alpha=0.6))
@@ -159,7 +160,7 @@ def figure1(full: tuple[str, EpisodeRecord], prog: tuple[str, EpisodeRecord], pa
 def unlabeled_scene(label: str, rec: EpisodeRecord, step: int, path: Path, title: str) -> Path:
     """Figure 5: starts (open), ends (filled) and goals (x) of every agent, and the attention of each round."""
     plt = matplotlib_agg()
-    rounds = rec.mask.shape[1]
+    rounds = rec.rounds
     fig, axes = plt.subplots(1, 1 + rounds, figsize=(4.6 * (1 + rounds), 4.4), dpi=110)
     _scene(axes[0], rec, group_mean=False)
     axes[0].set_title(f"(a) {label}: starts (open), ends (filled), goals (x)\nloss {rec.cost.mean():.3f} "
