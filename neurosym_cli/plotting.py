@@ -307,9 +307,24 @@ def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across
         mx, hx, my, hy = across[b]
         ax.errorbar(mx, my, xerr=hx, yerr=hy, fmt="o", ms=7, color=col, capsize=3, lw=1.2, zorder=4)
         names.append(b), xs.append(mx), ys.append(my), cols.append(col)
-    ax.margins(x=0.3, y=0.12)
-    x0, x1 = ax.get_xlim()
-    ax.set_xlim(max(x0, -0.06 * x1), x1)  # a degree is never negative
+    # the frame holds the markers, not the intervals: with 2 or 3 seeds a t-interval (t = 12.7 at 1 degree of
+    # freedom) can span many times the spread of the points and would squeeze them into a corner
+    px = [x for pts in points.values() for _, x, _ in pts] + xs
+    py = [y for pts in points.values() for _, _, y in pts] + ys
+    (x0, x1), (y0, y1) = (min(px), max(px)), (min(py), max(py))
+    wx, wy = max(x1 - x0, 1e-9), max(y1 - y0, 1e-9)
+    x0, x1, y0, y1 = x0 - 0.3 * wx, x1 + 0.3 * wx, y0 - 0.12 * wy, y1 + 0.12 * wy
+    if min(px) >= 0:
+        x0 = max(x0, -0.06 * x1)  # a degree is never negative
+    if min(py) >= 0:
+        y0 = max(y0, -0.02 * y1)  # nor is a loss here
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    cut = [b for b, (mx, hx, my, hy) in across.items()
+           if (hx is not None and (mx - hx < x0 or mx + hx > x1)) or (hy is not None and (my - hy < y0 or my + hy > y1))]
+    if cut:
+        ax.text(0.99, 0.01, "intervals beyond the frame are cut: " + ", ".join(cut), transform=ax.transAxes,
+                ha="right", va="bottom", fontsize=6.5, color="0.35", wrap=True)
     place_labels(ax, xs, ys, names, cols)
     handles = [Line2D([], [], ls="", marker="o", ms=7, color="0.3",
                       label="mean over training seeds ± 95 % t-interval")]
