@@ -875,6 +875,20 @@ def test_interpolations_removals_and_huge_numbers_in_overrides_are_one_line(tmp_
     assert not list(tmp_path.rglob("model.pt"))
 
 
+@pytest.mark.parametrize("arg", ["task=random-gird", "baseline=tf-ful", "hydra/launcher=nope", "seed=${oops}",
+                                 "+foo=1"])
+def test_the_python_api_raises_the_console_scripts_line(tmp_path, arg):
+    """`ns.compose` refuses bad input with the very line `neurosym train` prints (not Hydra's "Could not find")."""
+    import neurosym_cli.api as ns
+    from neurosym_cli.errors import UserError
+
+    with pytest.raises(UserError) as e:
+        ns.compose("train", [arg, "budget=tiny"])
+    p = run(["train", arg, "budget=tiny"], tmp_path, check=False)
+    one_line_error(p, str(e.value))
+    assert p.stderr.strip() == f"neurosym train: error: {e.value}"
+
+
 def test_working_interpolations_still_work(tmp_path):
     from neurosym_cli.overrides import check
 

@@ -126,6 +126,7 @@ def compose_config(cmd: str, overrides: list[str] | None = None, config_dir: str
     try:
         with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
             cfg = compose(cmd, overrides=items)
-    except Exception as e:  # Hydra's missing option, grammar errors: one line, as on the command line
-        raise UserError(str(e).splitlines()[0] if str(e) else type(e).__name__) from None
+    except Exception as e:  # Hydra's missing option, grammar errors: the console script's one line
+        msg = hydra_problem(e) or (str(e).splitlines()[0] if str(e) else type(e).__name__)
+        raise UserError(cut_words(msg)) from None
     return typed_config(cfg)
