@@ -271,7 +271,8 @@ def test_hand_written_program_never_overwrites_the_synthesized_one(tmp_path):
     (exp / "eval/tf-full").mkdir(parents=True, exist_ok=True)
     (exp / "eval/tf-full/metrics.json").write_text('{"label": "tf-full"}')
     one_line_error(run(["report", "task=random-grid", "budget=tiny"], tmp_path, check=False),
-                   "not an evaluation written by")
+                   "not an evaluation written by `neurosym eval`; delete it and run `neurosym pipeline "
+                   "task=random-grid budget=tiny seed=0 runs_root=")
 
 
 # ------------------------------------------------------------------------------------------ signals

@@ -96,6 +96,24 @@ def _rows(per_seed: Any, where: str) -> list[dict[str, float]]:
             for r in per_seed]
 
 
+def _remake(seed_dir: Path, verb: str, files: list[Path]) -> str:
+    """The command that writes a seed directory's files again (`neurosym <verb> task=... budget=... seed=...
+    runs_root=...`), its settings read from a train manifest or evaluation of that directory that still reads;
+    the bare verb when none does."""
+    import shlex
+
+    for f in [*sorted(Path(seed_dir).glob("train/*/manifest.json")), *files]:
+        try:
+            c = json.loads(f.read_text())
+            c = c.get("config", c) if isinstance(c, dict) else {}
+            args = [f"task={c['task']['name']}", f"budget={c['budget']['name']}", f"seed={int(c['seed'])}",
+                    f"runs_root={c['runs_root']}"]
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            continue
+        return f"`neurosym {verb} {shlex.join(args)}`"
+    return f"`neurosym {verb}` for that task, budget and seed"
+
+
 def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
     """The evaluations of one seed directory (None when it has none)."""
     files = sorted(Path(seed_dir).glob("eval/*/metrics.json"))
@@ -108,15 +126,16 @@ def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
             rec = json.loads(sel.read_text())
             pick = {k: rec[k] for k in ("rules", "lam", "features")}
         except (OSError, ValueError, KeyError, TypeError):
-            raise ArtifactError(f"{sel} is not a selection written by `neurosym select`; run it again") from None
+            raise ArtifactError(f"{sel} is not a selection written by `neurosym select`; delete it and run "
+                                f"{_remake(seed_dir, 'select', files)}") from None
     raw = []
     for f in files:
         try:
             m = json.loads(f.read_text())
             raw.append((f, m["baseline"], m["label"], m.get("config") or {}, m["per_seed"]))
         except (OSError, ValueError, KeyError, TypeError):
-            raise ArtifactError(f"{f} is not an evaluation written by `neurosym eval`; delete it and evaluate again") \
-                from None
+            raise ArtifactError(f"{f} is not an evaluation written by `neurosym eval`; delete it and run "
+                                f"{_remake(seed_dir, 'pipeline', files)}") from None
     by_baseline: dict[str, list[tuple[str, dict]]] = {}
     for _, b, label, c, _ in raw:
         by_baseline.setdefault(b, []).append((label, c))
