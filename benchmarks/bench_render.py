@@ -101,7 +101,8 @@ def swarm(n: int, steps: int, every: int) -> None:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
     dense = steps * rec.rounds * n * n * 5  # a bool mask and a float32 weight per pair, step and round
     print(f"swarm N={n} T={steps}: record {t1 - t0:6.1f} s ({(t1 - t0) / steps:.3f} s a step), episode "
-          f"{_bytes(rec) / 1e6:.1f} MB ({rec.edges.recv.size:,} edges; dense masks and weights: {dense / 1e9:.1f} GB) | "
+          f"{_bytes(rec) / 1e6:.1f} MB ({rec.edges.recv.size:,} edges; dense masks and weights: "
+          f"{dense / 1e9:.1f} GB) | "
           f"animation {t2 - t1:5.1f} s ({frames} frames, {gif.stat().st_size / 1e6:.1f} MB) | "
           f"peak RSS {peak:.2f} GB (before the episode {peak0:.2f} GB)")
 

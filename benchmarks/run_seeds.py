@@ -19,7 +19,8 @@ resumable artifacts of an unfinished task-seed (the oracle's checkpoint and hist
 summary, select's validations, retrained models, evaluations; no datasets, traces or logs: under 1 MB) are stashed
 under ``<out>/partial/<task>-seed<S>/`` every ``--stash-every`` seconds and committed with ``--commit``; the next
 session's runner copies them back and goes on from there, and the stash is removed when the result file lands.
-``--stash-only`` does just the stashing, for runs already going.
+``--stash-only`` does just the stashing, for runs already going; ``--recollect`` writes result files again from run
+directories still on disk (after a fix in what ``collect`` keeps).
 """
 
 from __future__ import annotations
@@ -64,8 +65,10 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
     for f in sorted(exp.glob("eval/*/metrics.json")):
         m = json.loads(f.read_text())
         c = m["config"]
-        if m["rules"] != pick["rules"] or c.get("program"):
-            continue  # another K (the selection's own evaluations of other grid points), or a hand-written program
+        if c["rules"] != pick["rules"] or c.get("program"):
+            # another K (the selection's own evaluations of other grid points), or a hand-written program; the
+            # config's K, not the metrics' (a searched program simplified to fewer rules records its own count)
+            continue
         if isinstance(SCHEMES.get(m["baseline"]), Searched) and (c["lam"] != pick["lam"]
                                                               or c["features"] != pick["features"]):
             continue
@@ -161,8 +164,15 @@ def main() -> None:
                     "task-seed's resumable artifacts (0 = never)")
     ap.add_argument("--stash-only", action="store_true", help="only stash (and commit) the given task-seeds' run "
                     "directories every --stash-every seconds, until interrupted")
+    ap.add_argument("--recollect", action="store_true", help="write the given task-seeds' result files again from "
+                    "their run directories (kept wall time and machine), where both exist, and run nothing")
     args = ap.parse_args()
     out, runs = Path(args.out), Path(args.runs)
+    if args.recollect:
+        for seed in args.seeds:
+            for task in args.tasks:
+                recollect(out, runs, task, seed, args)
+        return
     if args.stash_only:
         while True:
             for seed in args.seeds:
@@ -208,9 +218,7 @@ def main() -> None:
                 print(f"{task} seed {seed}: exit {rc}; see {logs / (task + f'-seed{seed}.log')}", flush=True)
                 continue
             res = collect(exp, task, seed, args.budget, time.time() - t0)
-            tmp = dest.with_suffix(".tmp")
-            tmp.write_text(json.dumps(res, indent=1, sort_keys=True) + "\n")
-            tmp.replace(dest)
+            write_result(dest, res)
             print(f"{time.strftime('%H:%M:%S')} {task} seed {seed}: {len(res['baselines'])} baselines, pick "
                   f"{res['pick']} in {res['wall_s'] / 60:.1f} min -> {dest}", flush=True)
             if args.commit:
@@ -222,6 +230,31 @@ def main() -> None:
                     subprocess.run(["git", "rm", "-r", "-q", "--", str(part)], cwd=out, check=False)
                     git_commit(part, f"docs/results/seeds: {task} training seed {seed} done; its stash removed")
                 shutil.rmtree(part, ignore_errors=True)
+
+
+def write_result(dest: Path, res: dict) -> None:
+    tmp = dest.with_suffix(".tmp")
+    tmp.write_text(json.dumps(res, indent=1, sort_keys=True) + "\n")
+    tmp.replace(dest)
+
+
+def recollect(out: Path, runs: Path, task: str, seed: int, args) -> None:
+    """A result file written again from its run directory by this ``collect`` (a fix in what it keeps), with the
+    wall time and machine of the run that made it."""
+    dest, exp = result_file(out, task, seed), runs / task / args.budget / f"seed{seed}"
+    if not (dest.exists() and (exp / "select" / "selected.json").exists()):
+        print(f"{task} seed {seed}: nothing to collect again (no result file or no run directory)", flush=True)
+        return
+    old = json.loads(dest.read_text())
+    res = {**collect(exp, task, seed, args.budget, old["wall_s"]), "machine": old["machine"]}
+    if res == old:
+        print(f"{task} seed {seed}: unchanged", flush=True)
+        return
+    write_result(dest, res)
+    print(f"{task} seed {seed}: collected again, {len(res['baselines'])} baselines (was {len(old['baselines'])})",
+          flush=True)
+    if args.commit:
+        git_commit(dest, f"docs/results/seeds: {task} training seed {seed} collected again")
 
 
 def keep_stash(out: Path, runs: Path, task: str, seed: int, args) -> None:

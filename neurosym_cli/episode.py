@@ -25,7 +25,7 @@ from .utils.seeding import STREAM_EVAL, generator
 class Edges:
     """Whom each agent heard over an episode, one row per edge (agent i hears agent j at step t, round r), instead
     of (T, R, N, N) masks and weights: a 1,000-agent swarm's 200 steps of 2 rounds under K = 5 rules hold at most
-    2 M edges (about 26 MB) where the dense masks and weights took 2.4 GB, and 10,000 agents' dense ones would not
+    2 M edges (about 26 MB) where the dense masks and weights took 2.0 GB, and 10,000 agents' dense ones would not
     fit in memory at all. The rows of one (t, r) are sorted by i, then j (the order of ``np.nonzero`` on its mask)."""
 
     n: int  # agents N
@@ -34,7 +34,8 @@ class Edges:
     recv: np.ndarray  # (E,) int32: the listening agent i
     sent: np.ndarray  # (E,) int32: the heard agent j
     weight: np.ndarray  # (E,) float32: the attention weight a_ij actually used
-    rule: np.ndarray | None  # (E,) int8: the first rule that picked j for i (-1: none); None when no program ran
+    rule: np.ndarray | None  # (E,) int16: the pick slot k that chose j for i, for a program the first rule that
+    # picked j (-1: none); None when the provider chose from logits (tf-full, hard-attn)
 
     @property
     def steps(self) -> int:
@@ -51,6 +52,7 @@ class Edges:
         return self.recv[s], self.sent[s], self.weight[s]
 
     def count(self, t: int, r: int) -> int:
+        """Edges E_tr of step t, round r."""
         s = self.rows(t, r)
         return s.stop - s.start
 
@@ -73,9 +75,9 @@ class Edges:
         return None if self.rule is None else self.rule[self.rows(t, r)]
 
     def of(self, t: int, r: int, receivers: np.ndarray) -> np.ndarray:
-        """(E_s,) the row numbers of step t, round r whose listener is one of ``receivers`` (S,) sorted, in order."""
+        """(E_s,) the row numbers of step t, round r whose listener is one of ``receivers`` (S,), in order."""
         s = self.rows(t, r)
-        return s.start + np.flatnonzero(np.isin(self.recv[s], receivers, assume_unique=False))
+        return s.start + np.flatnonzero(np.isin(self.recv[s], receivers))
 
     def degrees(self) -> tuple[np.ndarray, np.ndarray]:
         """(T,) max in-degree and (T,) max out-degree over agents, mean over rounds (as the evaluation)."""
@@ -89,7 +91,8 @@ class Edges:
         return din / self.rounds, dout / self.rounds
 
 
-def round_edges(heard, picks: torch.Tensor | None) -> tuple[np.ndarray, ...]:
+def round_edges(heard: "Heard | tuple[torch.Tensor, torch.Tensor]", picks: torch.Tensor | None
+                ) -> tuple[np.ndarray, ...]:
     """The edges of one round of agent batch 0, from what the policy reports it heard (``PolicyOutput.heard[r]``:
     a sparse path's ``Heard``, or the dense path's (weights, mask) (B, N, N)) and the picks (B, N, K) the
     provider handed out (None: no program) -> (i, j, a_ij, rule) (E,) each, sorted by i then j; rule is -1 without
@@ -105,7 +108,7 @@ def round_edges(heard, picks: torch.Tensor | None) -> tuple[np.ndarray, ...]:
     i, j = np.nonzero(mask[0].cpu().numpy())
     w = attn[0].detach().float().cpu().numpy()[i, j]
     rule = np.full(len(i), -1)
-    if picks is not None and len(i):  # the first rule whose pick for i is j (a repeat counts once)
+    if picks is not None and len(i) and picks.shape[-1]:  # the first rule whose pick for i is j (repeats once)
         hit = picks[0].cpu().numpy()[i] == j[:, None]  # (E, K)
         rule = np.where(hit.any(1), hit.argmax(1), -1)
     return i, j, w, rule
@@ -117,7 +120,7 @@ def stack_edges(n: int, rounds: int, per_round: list[tuple[np.ndarray, ...]], pr
     cat = [np.concatenate([e[c] for e in per_round]) if per_round else np.zeros(0) for c in range(4)]
     return Edges(n=n, rounds=rounds, start=np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64),
                  recv=cat[0].astype(np.int32), sent=cat[1].astype(np.int32), weight=cat[2].astype(np.float32),
-                 rule=cat[3].astype(np.int8) if programs else None)
+                 rule=cat[3].astype(np.int16) if programs else None)
 
 
 @dataclass
@@ -129,7 +132,9 @@ class EpisodeRecord:
     goal: np.ndarray  # (N, 2) each agent's goal (formation) or (G, 2) the goal set (unlabeled)
     group: np.ndarray  # (N,) group of each agent (zeros for unlabeled)
     edges: Edges  # whom each agent heard at each step and round, with the weights actually used
-    picks: np.ndarray | None  # (T, R, N, K) int32 the agent rule k picked for i (-1: nobody); programs only
+    picks: np.ndarray | None  # (T, R, N, K) int32 the agent pick slot k (a program's rule k) chose for i (-1:
+    # nobody), K the episode's widest (a provider such as comm-range pads to the degree of the moment); None when
+    # the provider chose from logits
     cost: np.ndarray  # (T,) loss of each step, summed over agents
     collide: np.ndarray  # (T, N) bool: after step t, the agent is closer than the collision distance to another
     labelled: bool  # formation (each agent its own goal) or unlabeled goals
@@ -181,6 +186,16 @@ def protocol_episode(env: Task, index: int, max_seeds: int = 1000) -> tuple[Task
     raise ValueError(f"episode {index} is beyond {max_seeds} evaluation seeds")
 
 
+def _pad_picks(picks: list[list[torch.Tensor]]) -> np.ndarray:
+    """Per step and round picks (N, K_tr) -> (T, R, N, K) int32, padded with -1 (nobody) to the widest K."""
+    k = max(p.shape[-1] for step in picks for p in step)
+    out = np.full((len(picks), len(picks[0]), picks[0][0].shape[0], k), -1, dtype=np.int32)
+    for t, step in enumerate(picks):
+        for r, p in enumerate(step):
+            out[t, r, :, :p.shape[-1]] = p.numpy()
+    return out
+
+
 def _colliding(pos: torch.Tensor, dist: float) -> torch.Tensor:
     """(N,) bool: agent of batch 0 closer than ``dist`` to another, by the cell list (no N x N distances)."""
     n = pos.shape[1]
@@ -216,7 +231,7 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
         programs = bool(rec.picked) and len(rec.picked) == len(out.heard)
         edges += [round_edges(h, rec.picked[r] if programs else None) for r, h in enumerate(out.heard)]
         if programs:
-            picks.append(torch.stack([p[0] for p in rec.picked]).to(torch.int32).cpu())
+            picks.append([p[0].to(torch.int32).cpu() for p in rec.picked])  # per round (N, K_r)
         collide.append(_colliding(state.pos, dist_c))
     policy.train(was_training)
     scene = require(env, "scene", "drawing an episode")(state)
@@ -224,6 +239,6 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
         pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=scene.goal.cpu().numpy(),
         group=scene.group.cpu().numpy(),
         edges=stack_edges(state.n_agents, len(out.heard), edges, programs=len(picks) == horizon),
-        picks=torch.stack(picks).numpy() if len(picks) == horizon else None,
+        picks=_pad_picks(picks) if len(picks) == horizon else None,
         cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=scene.labelled,
     )

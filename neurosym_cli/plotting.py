@@ -3,6 +3,8 @@ curves. One colour per baseline in every figure (``color``)."""
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -309,10 +311,12 @@ def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across
         names.append(b), xs.append(mx), ys.append(my), cols.append(col)
     # the frame holds the markers, not the intervals: with 2 or 3 seeds a t-interval (t = 12.7 at 1 degree of
     # freedom) can span many times the spread of the points and would squeeze them into a corner
-    px = [x for pts in points.values() for _, x, _ in pts] + xs
-    py = [y for pts in points.values() for _, _, y in pts] + ys
+    px = [x for x in [x for pts in points.values() for _, x, _ in pts] + xs if math.isfinite(x)] or [0.0]
+    py = [y for y in [y for pts in points.values() for _, _, y in pts] + ys if math.isfinite(y)] or [0.0]
     (x0, x1), (y0, y1) = (min(px), max(px)), (min(py), max(py))
-    wx, wy = max(x1 - x0, 1e-9), max(y1 - y0, 1e-9)
+    # a span of one value (one baseline, one seed) still gets a readable frame around it
+    wx, wy = (hi - lo if hi - lo > 1e-9 * max(1.0, abs(hi)) else 0.2 * max(abs(hi), 1.0)
+              for lo, hi in ((x0, x1), (y0, y1)))
     x0, x1, y0, y1 = x0 - 0.3 * wx, x1 + 0.3 * wx, y0 - 0.12 * wy, y1 + 0.12 * wy
     if min(px) >= 0:
         x0 = max(x0, -0.06 * x1)  # a degree is never negative
@@ -321,7 +325,8 @@ def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     cut = [b for b, (mx, hx, my, hy) in across.items()
-           if (hx is not None and (mx - hx < x0 or mx + hx > x1)) or (hy is not None and (my - hy < y0 or my + hy > y1))]
+           if (hx is not None and (mx - hx < x0 or mx + hx > x1))
+           or (hy is not None and (my - hy < y0 or my + hy > y1))]
     if cut:
         ax.text(0.99, 0.01, "intervals beyond the frame are cut: " + ", ".join(cut), transform=ax.transAxes,
                 ha="right", va="bottom", fontsize=6.5, color="0.35", wrap=True)

@@ -257,3 +257,55 @@ def test_the_sparse_and_dense_paths_record_the_same_edges():
     assert din[0] == deg.sum(1).max() and dout[1] == deg.sum(0).max()
     rows = edges.of(1, 0, np.array([3, 7]))
     assert set(edges.recv[rows].tolist()) == {3, 7} and np.all(rows >= edges.count(0, 0))
+
+
+def test_a_provider_whose_pick_width_changes_records_and_draws(tmp_path):
+    """comm-range pads its picks to the degree of the moment, so K changes from step to step: the episode records
+    (picks padded with -1 to the widest K) and its edges are exactly the agents within the radius."""
+    import dataclasses
+
+    from neurosym_cli.episode import protocol_episode, record_episode
+    from neurosym_cli.schemes import SCHEMES
+    from neurosym_cli.viz.animate import animate
+
+    env, policy = _setup(horizon=60)
+    scheme = dataclasses.replace(SCHEMES["comm-range"], radius=0.8)
+    state, gen, _ = protocol_episode(env, 0)
+    rec = record_episode(env, policy, scheme, state, gen, torch.device("cpu"))
+    widths = {int((rec.picks[t, 0] >= 0).sum(-1).max()) for t in range(rec.steps)}
+    assert len(widths) > 1 and rec.picks.shape[-1] == max(widths)
+    for t in (0, rec.steps // 2, rec.steps - 1):
+        d = np.linalg.norm(rec.pos[t][:, None] - rec.pos[t][None], axis=-1)  # positions the step observed
+        want = (d <= 0.8) & ~np.eye(rec.n_agents, dtype=bool)
+        assert np.array_equal(rec.edges.mask(t, 0), want)
+        assert np.all(rec.edges.rule_at(t, 0) >= 0)
+    path, frames = animate(rec, tmp_path / "range.gif", "test: comm-range", "mask", every=20)
+    assert frames == 4 and path.exists()
+
+
+def test_the_seed_plane_frames_its_markers_and_names_the_cut_intervals(tmp_path, monkeypatch):
+    """One seed per baseline on one x value still gets a readable frame; an interval far beyond the markers is
+    cut at the frame and named under it; a non-finite value is left out of the frame."""
+    from neurosym_cli import plotting
+
+    texts = []
+    real = plotting.save_figure
+
+    def keep(fig, path):
+        texts.extend(t.get_text() for ax in fig.axes for t in ax.texts)
+        lims.append((fig.axes[0].get_xlim(), fig.axes[0].get_ylim()))
+        return real(fig, path)
+
+    lims = []
+    monkeypatch.setattr(plotting, "save_figure", keep)
+    plotting.seeds_plane({"tf-full": [(0, 5.0, 40.0)]}, {"tf-full": (5.0, None, 40.0, None)}, "one point",
+                         tmp_path / "a.png")
+    (x0, x1), (y0, y1) = lims[-1]
+    assert x0 < 5.0 < x1 and y0 < 40.0 < y1 and x1 - x0 > 0.1 and y1 - y0 > 1.0
+    pts = {"tf-full": [(0, 40.0, 60.0), (1, 41.0, 62.0)], "no-comm": [(0, 0.0, 90.0), (1, 0.0, float("nan"))]}
+    across = {"tf-full": (40.5, 1.0, 61.0, 2.0), "no-comm": (0.0, 0.0, 90.0, 400.0)}
+    plotting.seeds_plane(pts, across, "cut", tmp_path / "b.png")
+    (x0, x1), (y0, y1) = lims[-1]
+    assert 0 <= y0 < 60.0 and 90.0 < y1 < 200.0 and x0 <= 0.0 and x1 > 41.0
+    assert any(t.startswith("intervals beyond the frame are cut: no-comm") for t in texts)
+    assert (tmp_path / "b.png").stat().st_size > 0
