@@ -71,7 +71,8 @@ class Edges:
         return out
 
     def rule_at(self, t: int, r: int) -> np.ndarray | None:
-        """(E_tr,) the rule of each edge of step t, round r (aligned with ``at``); None when no program ran."""
+        """(E_tr,) the pick slot (a program's rule) of each edge of step t, round r, aligned with ``at``; None when
+        the provider chose from logits."""
         return None if self.rule is None else self.rule[self.rows(t, r)]
 
     def of(self, t: int, r: int, receivers: np.ndarray) -> np.ndarray:
