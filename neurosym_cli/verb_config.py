@@ -4,7 +4,9 @@ evaluation live in config.py."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 from .errors import check as _check, check_finite
 
@@ -33,6 +35,9 @@ class RenderConfig:
     """from this many agents on, frames are drawn as a crowd: points by group, fading trails, sampled edges"""
     receivers: int = 40
     """crowd frames: the edges of this many receivers (drawn at random once, seeded) are shown, not all"""
+    window: Optional[list[float]] = None
+    """[x0, x1, y0, y1], world units: frames and the episode picture show this region only (a zoom into a swarm;
+    crowd frames then sample their receivers among the agents that start in it); null: the whole episode"""
 
     def __post_init__(self) -> None:
         check_finite(self, "render.")
@@ -42,6 +47,13 @@ class RenderConfig:
                "render.trail, render.step and render.agent non-negative")
         _check(self.crowd_from >= 1 and self.receivers >= 0,
                "render.crowd_from must be positive and render.receivers non-negative")
+        if self.window is not None:
+            w = [float(v) for v in self.window]
+            _check(len(w) == 4 and all(math.isfinite(v) for v in w) and w[0] < w[1] and w[2] < w[3],
+                   f"render.window must be [x0, x1, y0, y1] with x0 < x1 and y0 < y1 (world units), got "
+                   f"{list(self.window)}; e.g. render.window=[-20,20,-10,10], or render.window=null for the whole "
+                   f"episode")
+            self.window = w
 
 
 @dataclass

@@ -150,6 +150,10 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
     assert (out / "episode1.png").stat().st_size > 5000 and "rendered" in p.stdout
     run(["render", "task=two-groups-cross", "budget=tiny", "baseline=tf-full"], tmp_path)
     assert (tmp_path / "two-groups-cross/tiny/seed0/render/tf-full/episode0.gif").exists()
+    # a zoom is its own picture, beside the whole one, not over it
+    p = run(["render", "task=two-groups-cross", "budget=tiny", "episode=1", "render.window=[5,7.5,-1,1]"], tmp_path)
+    assert Image.open(out / "episode1-window5_7.5_-1_1.gif").n_frames == 9 and "window" in p.stdout
+    assert Image.open(out / "episode1.gif").n_frames == 5
     p = run(["show-program", "task=two-groups-cross", "budget=tiny"], tmp_path)
     assert "fires" in p.stdout and "if removed" in p.stdout and "%" in p.stdout  # rule statistics from summary
     summary = json.loads((tmp_path / "two-groups-cross/tiny/seed0/synth/k2-lam0.5-v1/summary.json").read_text())
@@ -164,7 +168,10 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
     # bad values are one line each
     for args, needle in ((["render.format=avi"], "render.format must be gif or mp4"),
                          (["render.round=2"], "has 1 round(s)"),
-                         (["episode=-1"], "episode must be >= 0")):
+                         (["episode=-1"], "episode must be >= 0"),
+                         (["render.window=[1,0,0,1]"], "x0 < x1 and y0 < y1"),
+                         (["render.window=[1,2,3]"], "render.window must be [x0, x1, y0, y1]"),
+                         (["render.window=[1000,1001,0,1]"], "no agent of episode 0 enters render.window")):
         p = run(["render", "task=two-groups-cross", "budget=tiny", *args], tmp_path, check=False)
         assert p.returncode != 0 and needle in p.stderr and "Traceback" not in p.stderr, p.stderr
     p = run(["render", "task=two-groups-cross", "budget=tiny", "baseline=no-comm"], tmp_path, check=False)
@@ -205,6 +212,18 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
             assert scene.drawn == mask[scene.recv].sum() <= 25 * 2  # K = 2 rules
             assert scene.total == mask.sum() > 4 * scene.drawn
             assert len(scene.edges.get_segments()) == scene.drawn
+    finally:
+        scene.close()
+    # a zoom: the axes show the window, and the receivers are sampled among the agents that start in it
+    lo, hi = rec.pos[0].min(0), rec.pos[0].max(0)
+    mid = (lo + hi) / 2
+    window = [float(lo[0]), float(mid[0]), float(lo[1]), float(hi[1])]
+    scene = CrowdScene(rec, "test: swarm", "rules", 0, 2, receivers=25, seed=1, window=window)
+    try:
+        assert scene.ax.get_xlim() == pytest.approx(window[:2]) and scene.ax.get_ylim() == pytest.approx(window[2:])
+        inside = rec.pos[0, scene.recv]
+        assert len(scene.recv) == 25 and (inside[:, 0] <= mid[0]).all()
+        assert "render.window" in scene.fig._suptitle.get_text()
     finally:
         scene.close()
     path, frames = animate(rec, tmp_path / "swarm.gif", "test: swarm", "rules", receivers=25,

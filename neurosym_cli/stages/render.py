@@ -38,27 +38,36 @@ def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, s
 
 def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym render`: <exp_dir>/render/<label>/episode<k>.gif (or .mp4), episode<k>.png (the whole episode)
-    and episode<k>-frames.png (four frames of the animation)."""
+    and episode<k>-frames.png (four frames of the animation); with render.window=[x0,x1,y0,y1] (a zoom) the names
+    are episode<k>-window<x0>_<x1>_<y0>_<y1>.*, so a zoom never replaces the whole picture."""
     from ..viz.animate import animate, edge_style, episode_png
+    from ..viz.draw import in_window
 
     if cfg.render.round > cfg.task.rounds:
         raise ConfigError(f"render.round={cfg.render.round}, but {cfg.task.name} has {cfg.task.rounds} round(s)")
     rec, title = record(cfg)
+    window = cfg.render.window
+    if window is not None and not any(in_window(window, p).any() for p in rec.pos):
+        lo, hi = rec.pos.reshape(-1, 2).min(0), rec.pos.reshape(-1, 2).max(0)
+        raise ConfigError(f"no agent of episode {cfg.episode} enters render.window={window}; its agents move in x in "
+                          f"[{lo[0]:.1f}, {hi[0]:.1f}], y in [{lo[1]:.1f}, {hi[1]:.1f}]: choose a window there, or "
+                          f"render.window=null for the whole episode")
     out = paths.render_dir(cfg)
+    stem = f"episode{cfg.episode}" + ("" if window is None else "-window" + "_".join(f"{v:g}" for v in window))
     style = edge_style(rec, cfg.baseline)
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
     try:
-        anim, frames = animate(rec, out / f"episode{cfg.episode}.{cfg.render.format}", title + round_note, style,
+        anim, frames = animate(rec, out / f"{stem}.{cfg.render.format}", title + round_note, style,
                                cfg.render.every, cfg.render.fps, cfg.render.trail, cfg.render.round - 1,
                                cfg.render.crowd_from, cfg.render.receivers, cfg.seed,
-                               stills=out / f"episode{cfg.episode}-frames.png")
+                               stills=out / f"{stem}-frames.png", window=window)
     except FileNotFoundError as e:
         raise ConfigError(str(e)) from None
-    png = episode_png(rec, out / f"episode{cfg.episode}.png", title)
+    png = episode_png(rec, out / f"{stem}.png", title, window)
     log.info("episode %d: loss %.3f (time-averaged), %d steps, %d agents", cfg.episode, rec.cost.mean(), rec.steps,
              rec.n_agents)
-    say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {out / f'episode{cfg.episode}-frames.png'}")
-    return {"animation": str(anim), "frames": frames, "png": str(png), "stills": str(out / f"episode{cfg.episode}-frames.png"),
+    say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {out / f'{stem}-frames.png'}")
+    return {"animation": str(anim), "frames": frames, "png": str(png), "stills": str(out / f"{stem}-frames.png"),
             "loss": float(rec.cost.mean())}
 
 

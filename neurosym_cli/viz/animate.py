@@ -17,8 +17,8 @@ import numpy as np
 from ..episode import EpisodeRecord
 from ..utils.io import atomic_file
 from .crowd import CrowdScene
-from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, BlitScene, edge_handles, edge_segments, frame_limits,
-                   group_color, matplotlib_agg, save_figure, wrap_title)
+from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, BlitScene, edge_handles, edge_segments, group_color,
+                   matplotlib_agg, save_figure, view_limits, window_note, wrap_title)
 
 def edge_style(rec: EpisodeRecord, baseline) -> str:
     """How a frame draws a provider's edges: "rules" (coloured by rule, programs), "weights" (opacity = attention
@@ -51,14 +51,15 @@ class _Scene(BlitScene):
     """One figure whose artists are updated frame by frame (drawn once, then only moved: fast)."""
 
     def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, size: float = 5.6,
-                 dpi: int = 90):
+                 dpi: int = 90, window: list[float] | None = None):
         from matplotlib.collections import LineCollection
         from matplotlib.lines import Line2D
 
         plt = matplotlib_agg()
         self.rec, self.style, self.round, self.trail = rec, style, round_, trail
         self.deg_in, self.deg_out = rec.degrees()
-        xlim, ylim, ratio = frame_limits(rec.pos, rec.goal)
+        xlim, ylim, ratio = view_limits(window, rec.pos, rec.goal)
+        ratio = float(np.clip(ratio, 0.75, 2.0))  # a window of any shape: equal axes leave the rest blank
         self.fig, ax = plt.subplots(figsize=(max(size, size * ratio ** 0.5), size / ratio ** 0.5 + 1.2), dpi=dpi)
         self.ax = ax
         colors = group_color(rec.group) if rec.labelled else ["#4e79a7"] * rec.n_agents
@@ -80,7 +81,7 @@ class _Scene(BlitScene):
         self.text = ax.text(0.5, 1.015, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=8,
                             family="monospace", animated=True)
         self.moving = (self.trails, self.edges, self.agents, self.rings, self.text)
-        self.fig.suptitle(wrap_title(title), fontsize=8)
+        self.fig.suptitle(wrap_title(title) + window_note(window), fontsize=8)
         handles = [Line2D([], [], marker="o", ls="", color=colors[0], ms=5, label="agent"),
                    Line2D([], [], marker="x", ls="", color=goal_colors[0], ms=5, label="goal"),
                    Line2D([], [], marker="o", ls="", mfc="none", mec=COLLISION_COLOR, ms=8, label="collision")]
@@ -113,11 +114,11 @@ class _Scene(BlitScene):
 
 def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int = 1, fps: int = 20,
             trail: int = 25, round_: int = 0, crowd_from: int = 200, receivers: int = 40, seed: int = 0,
-            stills: Path | None = None) -> tuple[Path, int]:
+            stills: Path | None = None, window: list[float] | None = None) -> tuple[Path, int]:
     """Write the episode as a GIF (path ending .gif) or MP4 (.mp4, needs ffmpeg): frames at steps 0, every,
     2 every, ..., T; from ``crowd_from`` agents on as crowd frames (crowd.py: the edges of ``receivers`` sampled
-    from ``seed``). ``stills``: also a PNG of four of the frames (start, two middle, end). Returns the path and the
-    number of frames."""
+    from ``seed``). ``stills``: also a PNG of four of the frames (start, two middle, end). ``window``: [x0, x1, y0,
+    y1], the region the frames show (all of the episode when None). Returns the path and the number of frames."""
     from PIL import Image
 
     if path.suffix == ".mp4" and shutil.which("ffmpeg") is None:
@@ -125,8 +126,8 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
     steps = list(range(0, rec.steps + 1, max(1, every)))
     if steps[-1] != rec.steps:
         steps.append(rec.steps)
-    scene = (CrowdScene(rec, title, style, round_, trail, receivers, seed) if rec.n_agents >= crowd_from
-             else _Scene(rec, title, style, round_, trail))
+    scene = (CrowdScene(rec, title, style, round_, trail, receivers, seed, window=window)
+             if rec.n_agents >= crowd_from else _Scene(rec, title, style, round_, trail, window=window))
     try:
         frames = []
         for t in steps:
@@ -168,13 +169,14 @@ def _stills(frames: list[np.ndarray], path: Path) -> Path:
     return path
 
 
-def episode_png(rec: EpisodeRecord, path: Path, title: str) -> Path:
-    """The whole episode in one picture: every agent's path from start (open circle) to end (dot) with the goals,
-    and beside it the loss and the max in- and out-degree of every step."""
+def episode_png(rec: EpisodeRecord, path: Path, title: str, window: list[float] | None = None) -> Path:
+    """The whole episode in one picture: every agent's path from start (open circle) to end (dot) with the goals
+    (in ``window`` [x0, x1, y0, y1] only, when given), and beside it the loss and the max in- and out-degree of
+    every step (of the whole team)."""
     plt = matplotlib_agg()
     colors = group_color(rec.group) if rec.labelled else ["#4e79a7"] * rec.n_agents
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.8), dpi=110, gridspec_kw={"width_ratios": [1, 1.15]})
-    xlim, ylim, _ = frame_limits(rec.pos, rec.goal)
+    xlim, ylim, _ = view_limits(window, rec.pos, rec.goal)
     for i in range(rec.n_agents):
         a.plot(rec.pos[:, i, 0], rec.pos[:, i, 1], color=colors[i], lw=0.8, alpha=0.8)
     a.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=16, facecolors="none", edgecolors=colors, lw=0.8,
@@ -210,6 +212,6 @@ def episode_png(rec: EpisodeRecord, path: Path, title: str) -> Path:
                 fontsize=9)
     for ax in (b, b2):
         ax.tick_params(labelsize=7)
-    fig.suptitle(wrap_title(title), fontsize=9)
+    fig.suptitle(wrap_title(title) + window_note(window), fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)

@@ -13,30 +13,44 @@ import numpy as np
 
 from ..episode import EpisodeRecord
 from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, edge_handles, edge_segments,
-                   frame_limits, group_color, matplotlib_agg, wrap_title)
+                   group_color, in_window, matplotlib_agg, view_limits, window_note, wrap_title)
 
 
-def sample_receivers(n: int, count: int, seed: int) -> np.ndarray:
-    """(S,) sorted agent indices, S = min(count, n), drawn without replacement from ``seed``."""
-    return np.sort(np.random.default_rng(seed).choice(n, size=min(count, n), replace=False))
+def sample_receivers(n: int, count: int, seed: int, among: np.ndarray | None = None) -> np.ndarray:
+    """(S,) sorted agent indices, S = min(count, candidates), drawn without replacement from ``seed``, among the
+    agents where ``among`` (N,) bool is true (all when None)."""
+    pool = np.arange(n) if among is None else np.flatnonzero(among)
+    return np.sort(np.random.default_rng(seed).choice(pool, size=min(count, len(pool)), replace=False))
+
+
+def window_receivers(rec: EpisodeRecord, window: list[float] | None) -> np.ndarray | None:
+    """(N,) bool, the agents a zoomed crowd frame samples its receivers from: those in ``window`` at the start,
+    else those that enter it at some step; None without a window."""
+    if window is None:
+        return None
+    start = in_window(window, rec.pos[0])
+    if start.any():
+        return start
+    return np.any([in_window(window, p) for p in rec.pos], axis=0)
 
 
 class CrowdScene(BlitScene):
     """The crowd frames of one episode; ``drawn`` and ``total`` are the edge counts of the last ``draw``."""
 
     def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, receivers: int,
-                 seed: int = 0, width: float = 10.0, dpi: int = 90):
+                 seed: int = 0, width: float = 10.0, dpi: int = 90, window: list[float] | None = None):
         from matplotlib.collections import LineCollection
         from matplotlib.colors import to_rgba
         from matplotlib.lines import Line2D
 
         plt = matplotlib_agg()
         self.rec, self.style, self.round, self.trail = rec, style, round_, trail
-        self.recv = sample_receivers(rec.n_agents, receivers, seed)  # (S,)
+        self.recv = sample_receivers(rec.n_agents, receivers, seed, window_receivers(rec, window))  # (S,)
         self.color = np.array([to_rgba(c) for c in (group_color(rec.group) if rec.labelled
                                                     else [GROUP_COLORS[0]] * rec.n_agents)])  # (N, 4)
         self.drawn = self.total = 0
-        xlim, ylim, ratio = frame_limits(rec.pos, rec.goal, ratio=(0.75, 5.0))  # fronts are long and thin
+        xlim, ylim, ratio = view_limits(window, rec.pos, rec.goal, ratio=(0.75, 5.0))  # fronts are long and thin
+        ratio = float(np.clip(ratio, 0.75, 5.0))  # a window of any shape: equal axes leave the rest blank
         self.fig, ax = plt.subplots(figsize=(width, width / ratio + 1.5), dpi=dpi)
         self.ax = ax
         ax.set_xlim(*xlim)
@@ -60,7 +74,8 @@ class CrowdScene(BlitScene):
         self.moving = (self.trails, self.agents, self.edges, self.marked, self.rings, self.text)
         groups = sorted(set(rec.group.tolist())) if rec.labelled else [0]
         self.fig.suptitle(wrap_title(title) + f"\npoints: agents by group, trails: last {trail} steps (fading); "
-                          f"edges of {len(self.recv)} of {rec.n_agents} receivers sampled at random (ringed)",
+                          f"edges of {len(self.recv)} of {rec.n_agents} receivers sampled at random (ringed)"
+                          f"{window_note(window)}",
                           fontsize=8)
         handles = [Line2D([], [], marker="o", ls="", color=GROUP_COLORS[g % len(GROUP_COLORS)], ms=4,
                           label=f"group {g}" if rec.labelled else "agent") for g in groups]

@@ -55,6 +55,31 @@ def frame_limits(*points: np.ndarray, margin: float = 0.06, ratio: tuple[float, 
     return (c[0] - half[0], c[0] + half[0]), (c[1] - half[1], c[1] + half[1]), float(half[0] / half[1])
 
 
+def view_limits(window: list[float] | None, *points: np.ndarray, ratio: tuple[float, float] = (0.75, 2.0)):
+    """``frame_limits`` of the points, or the ``window`` [x0, x1, y0, y1] (render.window) when given:
+    ((x0, x1), (y0, y1)), width / height."""
+    if window is None:
+        return frame_limits(*points, ratio=ratio)
+    x0, x1, y0, y1 = window
+    return (x0, x1), (y0, y1), float((x1 - x0) / (y1 - y0))
+
+
+def in_window(window: list[float] | None, pos: np.ndarray) -> np.ndarray:
+    """pos (N, 2) -> (N,) bool, whether each point lies in ``window`` (every point when it is None)."""
+    if window is None:
+        return np.ones(len(pos), bool)
+    x0, x1, y0, y1 = window
+    return (pos[:, 0] >= x0) & (pos[:, 0] <= x1) & (pos[:, 1] >= y0) & (pos[:, 1] <= y1)
+
+
+def window_note(window: list[float] | None) -> str:
+    """A title's last line about the window (with its leading newline): "" for the whole episode."""
+    if window is None:
+        return ""
+    x0, x1, y0, y1 = window
+    return f"\nzoomed to x in [{x0:g}, {x1:g}], y in [{y0:g}, {y1:g}] (render.window); agents outside are not shown"
+
+
 def wrap_title(title: str) -> str:
     """A long title broken after its first colon, the way the figures' titles are built (what: which)."""
     head, sep, tail = title.partition(": ")
