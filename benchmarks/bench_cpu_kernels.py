@@ -35,21 +35,22 @@ def child(a: argparse.Namespace) -> None:
     import neurosym_cli  # noqa: F401  (first: applies the mode before torch loads)
     import torch
 
-    from neurosym_cli.config import CrossConfig, ModelConfig, OptimConfig
+    from neurosym_cli.config import ModelConfig, OptimConfig
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
-    from neurosym_cli.envs import make_env
-    from neurosym_cli.policy import CommTransformer, make_comm
+    from neurosym_cli.policy import CommTransformer, FullComm
     from neurosym_cli.synth.dataset import collect
     from neurosym_cli.synth.mcmc import metropolis
     from neurosym_cli.synth.objective import CachedScorer
     from neurosym_cli.synth.search import feature_quantiles
+    from neurosym_cli.tasks.random_cross import CrossConfig
+    from neurosym_cli.tasks.registry import make_task
     from neurosym_cli.training import FitSpec, fit
     from neurosym_cli.utils.cpu import runtime
 
     torch.set_num_threads(a.threads)
-    env = make_env(CrossConfig(name="random-cross", horizon=a.horizon))
+    env = make_task(CrossConfig(name="random-cross"), a.horizon)
     torch.manual_seed(0)
-    pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
+    pol = CommTransformer(env.obs_dim, env.action_dim, env.rounds, ModelConfig(), pair_dim=env.pair_dim)
     stamps: list[tuple[float, float]] = []  # (wall, CPU) seconds at the end of each optimizer step
 
     class Clock:
@@ -58,7 +59,7 @@ def child(a: argparse.Namespace) -> None:
 
     spec = FitSpec(rollouts=a.batch * (a.steps + 1), batch=a.batch, horizon=a.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(step_per_bucket=False))
-    fit(pol, env, make_comm("full", 5), spec, torch.Generator().manual_seed(0), torch.device("cpu"), Clock(),
+    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), torch.device("cpu"), Clock(),
         lambda s: None)
     # the first step warms up (allocations, caches), so the steps timed run from its end
     wall = [b[0] - a_[0] for a_, b in zip(stamps, stamps[1:])]
@@ -69,7 +70,7 @@ def child(a: argparse.Namespace) -> None:
     t0, c0 = time.perf_counter(), time.process_time()
     data = collect(env, pol, a.rollouts, 10, torch.Generator().manual_seed(0), torch.device("cpu"))
     collect_s, collect_cpu = time.perf_counter() - t0, time.process_time() - c0
-    sc = CachedScorer(pol, env, "formation", data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(1),
+    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(1),
                       torch.device("cpu"), backend="auto")
     space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), 5)
     rng = random.Random(0)
@@ -89,7 +90,10 @@ def measure(mode: str, a: argparse.Namespace) -> dict:
     env["NEUROSYM_CPU_KERNELS"] = mode
     args = [sys.executable, __file__, "--child", *(f"--{k}={v}" for k, v in vars(a).items()
                                                     if k not in ("child", "json", "rounds"))]
-    p = subprocess.run(args, env=env, capture_output=True, text=True, check=True)
+    p = subprocess.run(args, env=env, capture_output=True, text=True)
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["(no output)"])[-1]
+        raise SystemExit(f"bench_cpu_kernels: the {mode} process failed (exit {p.returncode}): {last}")
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
