@@ -1086,6 +1086,14 @@ def seeds_glance(by_task: dict) -> str:
     return "\n".join(out)
 
 
+def seed_mean(by_task: dict, task: str, seed: int, baseline: str, metric: str = "cost") -> float:
+    """One training seed's mean of ``metric`` for ``baseline`` over its evaluation seeds (KeyError if absent)."""
+    run = next((r for r in by_task.get(task, []) if r.seed == seed), None)
+    if run is None:
+        raise KeyError(f"{task} training seed {seed} (no seed file)")
+    return seed_variant(run)["baselines"][baseline]["summary"][metric]["mean"]
+
+
 def draw_seed_figures(by_task: dict, out_dir: Path = DOCS / "figures") -> None:
     """seeds-<task>.png and seeds-profile.png from the seed files alone (neurosym_cli.seeds.draw)."""
     from neurosym_cli import seeds
@@ -1119,6 +1127,7 @@ def render(template: str, variants: dict[str, dict], run: dict, seed_runs: dict 
         "seeds": lambda: seeds_section(by_task),
         "seeds_glance": lambda: seeds_glance(by_task).rstrip("\n"),
         "seeds_planned": lambda: ", ".join(map(str, PLANNED_SEEDS)),
+        "seedmean": lambda t, seed, b, m, d: fmt(seed_mean(by_task, t, int(seed), b, m), d),
     }
 
     def sub(m: re.Match) -> str:

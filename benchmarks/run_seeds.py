@@ -87,9 +87,16 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
         "baselines": baselines, "programs": programs,
         "timings": json.loads(timings.read_text()) if timings.exists() else {},
         "wall_s": round(wall_s, 1),
-        "machine": {"cpu_kernels": PIN["ATEN_CPU_CAPABILITY"], "pin": PIN, "python": platform.python_version(),
+        "machine": {**machine(exp), "pin": PIN, "python": platform.python_version(),
                     "processor": platform.processor() or platform.machine(), "cores": os.cpu_count()},
     }
+
+
+def machine(exp: Path) -> dict:
+    """What the oracle of a run directory trained with (its manifest's runtime record): the cpu_kernels mode, MKL's
+    path, the CPU's vendor and model."""
+    rt = json.loads((exp / "train" / "oracle" / "manifest.json").read_text()).get("runtime") or {}
+    return {k: rt.get(k) for k in ("cpu_kernels", "mkl_path", "cpu_vendor", "cpu")}
 
 
 STASH_MAX = 1 << 20

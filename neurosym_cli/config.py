@@ -223,10 +223,12 @@ class RunConfig:
     """torch CPU threads; 0 keeps torch's default"""
     cpu_kernels: str = "avx2"
     """which CPU kernels torch and MKL run, fixed before torch loads (utils/cpu.py): avx2 pins them to the AVX2
-    code paths (ATEN_CPU_CAPABILITY=avx2, MKL_CBWR=AVX2, ONEDNN_MAX_CPU_ISA=AVX2), so one seed and thread count
-    give the same numbers on x86 machines with and without AVX-512; native leaves torch and MKL to pick this CPU's
-    widest kernels (AVX-512 where present: numbers differ in the last digits from AVX2 machines, and the program
-    searches that follow may differ more). No effect off x86 (ARM has its own kernels) nor on a GPU. Set on the
+    code paths (ATEN_CPU_CAPABILITY=avx2, MKL_CBWR=AVX2, ONEDNN_MAX_CPU_ISA=AVX2) and gives every CPU vendor MKL's
+    Intel path, so one seed and thread count give the same numbers on every x86-64 machine with AVX2, AMD or Intel,
+    with and without AVX-512; avx2-vendor pins the same variables but leaves MKL its own path per vendor (AMD and
+    Intel differ; the default before 2026-12-03, which made docs/results.md's paper runs on AMD); native leaves
+    torch and MKL to pick this CPU's widest kernels (AVX-512 where present: numbers differ in the last digits from
+    AVX2 machines, and the program searches that follow may differ more). No effect off x86 (ARM has its own kernels) nor on a GPU. Set on the
     command line or in NEUROSYM_CPU_KERNELS, never in a YAML file: it must hold before torch is imported.
     Every artifact records it and what was in effect (its ``runtime``). ATen's scalar ``default`` kernels are not
     offered: every x86-64 CPU since 2013 runs the AVX2 path, and ARM has neither these kernels nor MKL, so they

@@ -5,6 +5,7 @@ the test sees was set by neurosym itself."""
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -16,8 +17,9 @@ import torch
 from conftest import ROOT, neurosym_cmd
 from neurosym_cli.utils import cpu
 
-PINNED = {"capability": "AVX2", "aten_cpu_capability": "avx2", "mkl_cbwr": "AVX2", "onednn_max_cpu_isa": "AVX2"}
-NATIVE = {"aten_cpu_capability": None, "mkl_cbwr": None, "onednn_max_cpu_isa": None}
+PINNED = {"capability": "AVX2", "aten_cpu_capability": "avx2", "mkl_cbwr": "AVX2", "onednn_max_cpu_isa": "AVX2",
+          "mkl_path": "intel", "mkl_shim": cpu.shim_path() is not None}
+NATIVE = {"aten_cpu_capability": None, "mkl_cbwr": None, "onednn_max_cpu_isa": None, "mkl_shim": False}
 
 needs_x86 = pytest.mark.skipif(not cpu.pinnable(), reason="the AVX2 pin applies to x86-64 CPUs with AVX2 only")
 
@@ -229,3 +231,79 @@ def test_help_stays_free_of_torch():
             "assert 'torch' not in sys.modules, 'torch imported'")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0, p.stderr
+
+
+# ------------------------------------------------------------------------------------------ MKL's path per vendor
+x86_linux = pytest.mark.skipif(not (cpu.pinnable() and sys.platform.startswith("linux")),
+                               reason="MKL's vendor path concerns x86-64 Linux with AVX2")
+
+
+@x86_linux
+def test_the_install_built_the_mkl_path_library():
+    """setup.py builds it with the package (optional: without a compiler the install goes on, and then this says
+    so); it defines the one function MKL asks."""
+    import ctypes
+
+    path = cpu.shim_path()
+    assert path is not None, "neurosym_cli/utils/_mkl_intel_path*.so is missing: reinstall with a C compiler present"
+    assert ctypes.CDLL(path).mkl_serv_intel_cpu_true() == 1
+
+
+@x86_linux
+def test_avx2_loads_mkls_intel_path_before_torch_and_avx2_vendor_does_not(tmp_path):
+    code = """
+        import json, neurosym_cli, torch
+        from neurosym_cli.utils.cpu import runtime, SHIM
+        maps = open("/proc/self/maps").read()
+        print(json.dumps({**runtime(), "mapped": SHIM in maps}))
+        """
+    for mode, shim in (("avx2", cpu.shim_path() is not None), ("avx2-vendor", False), ("native", False)):
+        p = python(code, tmp_path, clean_env(tmp_path, NEUROSYM_CPU_KERNELS=mode))
+        assert p.returncode == 0 and p.stderr == "", p.stderr
+        r = json.loads(p.stdout)
+        assert r["mkl_shim"] is shim and r["mapped"] is shim, (mode, r)
+        assert r["cpu_kernels"] == mode and r["pinned"] is (mode != "native"), (mode, r)
+
+
+def test_another_vendor_without_the_library_is_warned_once(monkeypatch):
+    monkeypatch.setattr(cpu, "cpu_vendor", lambda: "AuthenticAMD")
+    monkeypatch.setattr(cpu, "pinnable", lambda: True)
+    monkeypatch.setitem(cpu._state, "mkl_path", None)
+    monkeypatch.delenv("NEUROSYM_MKL_WARNED", raising=False)
+    msg = cpu._no_shim()
+    assert msg and msg.startswith("cpu_kernels=avx2: MKL's Intel path is not available on this AuthenticAMD CPU")
+    assert "reinstall neurosym where a C compiler is present" in msg and "\n" not in msg
+    assert cpu._no_shim() is None  # once per process tree (children inherit NEUROSYM_MKL_WARNED)
+    monkeypatch.setitem(cpu._state, "mkl_path", "intel")
+    monkeypatch.delenv("NEUROSYM_MKL_WARNED")
+    assert cpu._no_shim() is None  # loaded: nothing to say
+
+
+QEMU = shutil.which("qemu-x86_64")
+
+
+@x86_linux
+@pytest.mark.slow
+@pytest.mark.skipif(QEMU is None, reason="needs qemu-x86_64 (Debian's qemu-user) to emulate an AMD CPU")
+def test_an_emulated_amd_cpu_trains_the_weights_of_this_one(tmp_path):
+    """The claim of avx2: the same numbers on AMD as on Intel. QEMU emulates an AMD EPYC (Zen 2: AVX2, no AVX-512)
+    whose CPUID MKL reads, with IEEE-exact arithmetic (its approximate rsqrtps/rcpps are not the hardware's, which
+    is why MKL's AMD path, using them, gives a third result there); the weights a short training run gives there
+    under avx2 are this machine's, bit for bit, and under avx2-vendor they are not (the test can fail)."""
+    args = ["train", *TINY, "budget.horizon=20"]
+
+    def weights(root, mode, emulate):
+        env = clean_env(root, NEUROSYM_CPU_KERNELS=mode)
+        pre = [QEMU, "-cpu", "EPYC-Rome"] if emulate else []
+        p = subprocess.run([*pre, sys.executable, "-m", "neurosym_cli.cli", *args], cwd=ROOT, env=env,
+                           capture_output=True, text=True, timeout=900)
+        assert p.returncode == 0, p.stderr[-2000:]
+        ck = torch.load(root / "two-groups-cross/tiny/seed0/train/oracle/model.pt", weights_only=True)
+        return ck["state_dict"], ck["runtime"]
+
+    here, rt = weights(tmp_path / "here", "avx2", False)
+    amd, rt_amd = weights(tmp_path / "amd", "avx2", True)
+    assert rt_amd["mkl_shim"] is True and rt_amd["mkl_path"] == "intel"
+    assert all(torch.equal(here[k], amd[k]) for k in here), "avx2 on an emulated AMD CPU trained other weights"
+    vendor, _ = weights(tmp_path / "amd-vendor", "avx2-vendor", True)
+    assert not all(torch.equal(here[k], vendor[k]) for k in here), "MKL's AMD path gave Intel's weights"

@@ -175,7 +175,11 @@ def from_seed_file(path: Path) -> SeedRun:
         sel = r.get("selected") or {}
         grid = sorted({(p.get("lam"), p.get("rules"), p.get("features")) for p in r.get("selection") or []},
                       key=str)
-        settings = {"budget": r["budget"], "cpu_kernels": (r.get("machine") or {}).get("cpu_kernels"),
+        machine = r.get("machine") or {}
+        kernels = machine.get("cpu_kernels")
+        if kernels == "avx2" and "mkl_path" not in machine:
+            kernels = "avx2-vendor"  # written before 2026-12-03, when avx2 left MKL its own path per CPU vendor
+        settings = {"budget": r["budget"], "cpu_kernels": kernels,
                     "select.grid": [list(g) for g in grid], "select.val_seeds": sel.get("val_seeds"),
                     **{f"synth.{k}": v for k, v in (sel.get("synth") or {}).items()
                        if k not in ("coarse", "patience")}}  # coarse and patience: the pick's search schedule

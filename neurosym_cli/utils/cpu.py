@@ -1,6 +1,7 @@
-"""Which CPU kernels torch and MKL use: pinned to the AVX2 code paths by default, so one seed and thread count give
-the same numbers on x86 machines with and without AVX-512 (docs/reliability.md, 'The same numbers on every x86
-machine'). Stdlib only: it must run before torch is imported, which reads these variables when it loads.
+"""Which CPU kernels torch and MKL use: pinned to the AVX2 code paths and to MKL's Intel path by default, so one
+seed and thread count give the same numbers on every x86-64 machine with AVX2, AMD or Intel, with or without
+AVX-512 (docs/reliability.md, 'The same numbers on every x86 machine'). Stdlib only: it must run before torch is
+imported, which reads these variables (and binds MKL's vendor check) when it loads.
 
 The console script (cli.py) and ``import neurosym_cli`` call :func:`apply`; the mode travels to every child process
 (joblib and process-pool workers, submitit jobs) in ``NEUROSYM_CPU_KERNELS``, which their own ``import
@@ -18,21 +19,30 @@ ENV = "NEUROSYM_CPU_KERNELS"
 """environment variable holding the mode: set by the console script for its children, or by a user"""
 DEFAULT = "avx2"
 CHOICES = {
-    "avx2": "torch's and MKL's AVX2 code paths: the same numbers on AVX2 and AVX-512 machines",
-    "native": "the widest kernels this CPU has, AVX-512 where present",
+    "avx2": "torch's and MKL's AVX2 code paths and MKL's Intel path on every vendor: the same numbers on every "
+            "x86-64 machine with AVX2, AMD or Intel, with or without AVX-512",
+    "avx2-vendor": "the AVX2 code paths, MKL's own path per CPU vendor: AMD and Intel machines differ in the last "
+                   "bits (the default before 2026-12-03; docs/results.md's paper runs, made on AMD)",
+    "native": "the widest kernels this CPU has, AVX-512 where present, MKL's own path per vendor",
 }
 """cpu_kernels values -> what they do"""
+PINNED_MODES = ("avx2", "avx2-vendor")
+"""the modes that set PIN before torch loads"""
 PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2", "ONEDNN_MAX_CPU_ISA": "AVX2"}
-"""what the avx2 mode sets before torch loads: ATen's vectorized kernels (softmax, layer norm, elementwise), MKL's
+"""what the pinned modes set before torch loads: ATen's vectorized kernels (softmax, layer norm, elementwise), MKL's
 BLAS (the matmuls: conditional numerical reproducibility, AVX2 branch) and oneDNN's ISA ceiling (no fp32 op of
 this project reaches oneDNN on x86 today; the ceiling keeps it so if a torch release routes one there)"""
+SHIM = "_mkl_intel_path"
+"""the compiled library (utils/mkl_intel_path.c, built by setup.py) that gives every vendor MKL's Intel path: MKL's
+vector math (exp, log, sqrt) runs other code on AMD than on Intel even with MKL_CBWR=AVX2"""
 
 MARK = "NEUROSYM_PINNED"
 """the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
 them while a user's own settings stay"""
 
-_state: dict[str, object] = {"mode": None, "warned": False}
-"""this process: the mode applied (None: not yet), whether its warning was printed"""
+_state: dict[str, object] = {"mode": None, "warned": False, "mkl_path": None, "shim": None}
+"""this process: the mode applied (None: not yet), whether its warning was printed, and which MKL path it loaded
+with ("intel": the shim was loaded before torch; None: MKL's own choice), and the shim's handle while loaded"""
 
 
 def check(value: str) -> str | None:
@@ -71,6 +81,19 @@ def cpu_flags() -> frozenset[str]:
 
 
 @functools.lru_cache(maxsize=1)
+def cpu_vendor() -> str:
+    """The CPU's vendor id (GenuineIntel, AuthenticAMD, ...) from /proc/cpuinfo; "" where it cannot be read."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("vendor_id"):
+                    return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return ""
+
+
+@functools.lru_cache(maxsize=1)
 def cpu_model() -> str:
     """The CPU's model name (/proc/cpuinfo on Linux, else what platform reports)."""
     try:
@@ -92,6 +115,46 @@ def pinnable() -> bool:
     return not flags or "avx2" in flags  # unreadable flags (not Linux): every x86-64 CPU since 2013 has AVX2
 
 
+def shim_path() -> str | None:
+    """The compiled MKL-path library beside this file (built at install; None where it was not: no C compiler, not
+    x86-64 Linux)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    for name in sorted(os.listdir(here)):
+        if name.startswith(SHIM) and name.endswith(".so"):
+            return os.path.join(here, name)
+    return None
+
+
+def _load_shim() -> None:
+    """Before torch loads: make MKL take its Intel path (x86-64 with AVX2 and FMA, which that path needs). Loaded
+    with RTLD_GLOBAL, its mkl_serv_intel_cpu_true comes before libtorch_cpu.so's own in the lookup of every library
+    loaded later. Nothing happens where the library was not built (runtime() then records MKL's own path)."""
+    flags = cpu_flags()
+    if _state["mkl_path"] or not pinnable() or (flags and "fma" not in flags):
+        return
+    path = shim_path()
+    if path is None:
+        return
+    import ctypes
+
+    try:
+        _state["shim"] = ctypes.CDLL(path, mode=os.RTLD_GLOBAL)
+    except OSError:
+        return
+    _state["mkl_path"] = "intel"
+
+
+def _unload_shim() -> None:
+    """Before torch loads: undo :func:`_load_shim` (``import neurosym_cli`` applied the environment's mode, then the
+    command line asked for another)."""
+    if _state.get("shim") is None:
+        return
+    from _ctypes import dlclose
+
+    dlclose(_state.pop("shim")._handle)
+    _state["mkl_path"] = None
+
+
 def apply(mode: str | None = None) -> str | None:
     """Put ``mode`` (default: :func:`requested`) in effect for this process and its children. Before torch is
     imported it sets (avx2) or clears (native) the variables of ``PIN``; once torch is loaded nothing can change,
@@ -107,7 +170,13 @@ def apply(mode: str | None = None) -> str | None:
         _state["mode"] = mode
         return _mismatch(mode)
     ours = {k for k in os.environ.get(MARK, "").split(",") if k in PIN}
-    if mode == "avx2" and pinnable():
+    missing = None
+    if mode == "avx2":
+        _load_shim()
+        missing = _no_shim()
+    else:
+        _unload_shim()
+    if mode in PINNED_MODES and pinnable():
         for key, value in PIN.items():
             if os.environ.get(key) != value:
                 os.environ[key] = value
@@ -120,7 +189,24 @@ def apply(mode: str | None = None) -> str | None:
                 del os.environ[key]
         os.environ.pop(MARK, None)
     _state["mode"] = mode
-    return None
+    return missing
+
+
+def _intel() -> bool:
+    """Whether MKL takes its Intel path in this process: the shim is loaded, or the CPU is an Intel one (or not
+    x86, where nothing of this applies)."""
+    return _state["mkl_path"] == "intel" or cpu_vendor() in ("GenuineIntel", "") or not pinnable()
+
+
+def _no_shim() -> str | None:
+    """The warning of an avx2 process on another vendor's CPU that could not load the shim (said once per process
+    tree: children inherit the note that it was said)."""
+    if _intel() or os.environ.get("NEUROSYM_MKL_WARNED"):
+        return None
+    os.environ["NEUROSYM_MKL_WARNED"] = "1"
+    return (f"cpu_kernels=avx2: MKL's Intel path is not available on this {cpu_vendor()} CPU (the library "
+            f"neurosym_cli/utils/{SHIM}*.so was not built: reinstall neurosym where a C compiler is present), so "
+            "numbers differ in the last digits from Intel machines")
 
 
 def kept() -> list[str]:
@@ -139,15 +225,19 @@ def _mismatch(mode: str) -> str | None:
 
     cap = torch.backends.cpu.get_cpu_capability()
     pinned = cap == "AVX2" and in_effect()
-    if mode == "avx2" and (pinned or not pinnable()):
-        return None
-    if mode == "native" and not pinned:
-        return None
     have = f"torch uses {cap} kernels, MKL_CBWR={os.environ.get('MKL_CBWR', 'unset')}"
-    if mode == "avx2":
-        return (f"cpu_kernels=avx2, but torch was imported before the kernels could be pinned ({have}); numbers may "
-                "differ in the last digits from other machines: import neurosym_cli before torch, or set "
-                "ATEN_CPU_CAPABILITY=avx2 MKL_CBWR=AVX2 first")
+    if mode in PINNED_MODES:
+        if pinnable() and not pinned:
+            return (f"cpu_kernels={mode}, but torch was imported before the kernels could be pinned ({have}); numbers "
+                    "may differ in the last digits from other machines: import neurosym_cli before torch, or set "
+                    "ATEN_CPU_CAPABILITY=avx2 MKL_CBWR=AVX2 first")
+        if mode == "avx2" and not _intel():
+            return (f"cpu_kernels=avx2, but torch was imported before MKL's Intel path could be chosen on this "
+                    f"{cpu_vendor()} CPU; numbers may differ in the last digits from Intel machines: import "
+                    "neurosym_cli before torch")
+        return None
+    if not pinned:
+        return None
     return (f"cpu_kernels=native, but torch was loaded with the AVX2 pin ({have}); this run uses the pinned "
             f"kernels: set {ENV}=native before starting Python to opt out")
 
@@ -162,7 +252,10 @@ def warn_once(mode: str | None = None) -> None:
 
 def runtime() -> dict[str, object]:
     """What was in effect in this process, recorded beside every artifact: the cpu_kernels mode, torch's CPU
-    capability, the variables of the pin, the torch version, and the CPU (model, machine, AVX2 and AVX-512F)."""
+    capability, the variables of the pin, which of MKL's code paths ran ("intel": the shim was loaded or the CPU is
+    an Intel one; "vendor": MKL's own path for another vendor) and whether this process loaded the shim, the torch
+    version, and the CPU (vendor, model,
+    machine, AVX2 and AVX-512F)."""
     import torch
 
     flags = cpu_flags()
@@ -171,6 +264,9 @@ def runtime() -> dict[str, object]:
         "pinned": in_effect() and torch.backends.cpu.get_cpu_capability() == "AVX2",
         "capability": torch.backends.cpu.get_cpu_capability(),
         **{key.lower(): os.environ.get(key) for key in PIN},
+        "mkl_path": "intel" if _intel() and pinnable() else "vendor",
+        "mkl_shim": _state["mkl_path"] == "intel",
+        "cpu_vendor": cpu_vendor(),
         "torch": str(torch.__version__),  # a plain str: a checkpoint loads with weights_only=True
         "cpu": cpu_model(),
         "machine": platform.machine(),

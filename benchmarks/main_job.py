@@ -1,0 +1,89 @@
+"""The README's main job over training seeds: run it, then collect its small result files.
+
+    neurosym pipeline task=two-groups-cross -m seed=0,1,2 runs_root=/tmp/mainjob      # about 3 min a seed
+    python benchmarks/main_job.py /tmp/mainjob                                         # docs/results/main-job/
+
+Writes docs/results/main-job/seeds.json (per training seed: each baseline's summary over the 20 evaluation seeds,
+the programs, the stage timings), report.json, report.csv and improvement.csv (`neurosym report` across the seeds,
+copied from the runs root) and docs/figures/main-job-seeds.png (the loss-degree plane over the seeds), and prints
+the figures the README quotes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "docs" / "results" / "main-job"
+TASK, BUDGET = "two-groups-cross", "quick"
+QUOTED = ("tf-full", "prog-retrained", "det-prog-retrained", "hard-attn", "dist", "no-comm")
+
+
+def seed_record(exp: Path) -> dict:
+    """One training seed's run directory -> its baselines' summaries, programs and stage timings."""
+    baselines = {}
+    for f in sorted(exp.glob("eval/*/metrics.json")):
+        m = json.loads(f.read_text())
+        baselines[m["label"]] = {k: {x: round(v[x], 5) if isinstance(v[x], float) else v[x]
+                                     for x in ("mean", "std", "ci95", "n")} for k, v in m["summary"].items()}
+    programs = {p.parent.name: [line for line in p.read_text().splitlines() if line and not line.startswith("#")]
+                for p in sorted(exp.glob("synth/*/program.txt"))}
+    timings = exp / "pipeline_timings.json"
+    return {"baselines": baselines, "programs": programs,
+            "timings": json.loads(timings.read_text()) if timings.exists() else {}}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs_root", help="the runs root the main job ran in")
+    a = ap.parse_args()
+    base = Path(a.runs_root) / TASK / BUDGET
+    seeds = sorted(int(p.name[4:]) for p in base.glob("seed*") if p.name[4:].isdigit())
+    if not seeds:
+        raise SystemExit(f"no seed directories under {base}; run: neurosym pipeline task={TASK} -m seed=0,1,2 "
+                         f"runs_root={a.runs_root}")
+    env = {**os.environ, "NEUROSYM_RUNS": str(a.runs_root)}
+    p = subprocess.run([sys.executable, "-m", "neurosym_cli.cli", "report", f"task={TASK}", f"budget={BUDGET}",
+                        f"runs_root={a.runs_root}"], env=env, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SystemExit(f"neurosym report failed: {p.stderr.strip().splitlines()[-1:]}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name in ("report.json", "report.csv", "improvement.csv"):
+        shutil.copyfile(base / name, OUT / name)
+    shutil.copyfile(base / f"seeds-{TASK}.png", ROOT / "docs" / "figures" / "main-job-seeds.png")
+    from neurosym_cli.utils.cpu import runtime
+
+    rt = runtime()
+    record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))}",
+              "date": datetime.date.today().isoformat(),
+              "machine": {"cores": os.cpu_count(), "cpu": rt["cpu"], "cpu_vendor": rt["cpu_vendor"],
+                          "cpu_kernels": rt["cpu_kernels"], "mkl_path": rt["mkl_path"], "processor": platform.machine(),
+                          "threads": "0 (torch's default: the cores)", "torch": rt["torch"]},
+              "note": "per training seed: each baseline's summary over 20 evaluation seeds (mean, std ddof 1, "
+                      "ci95 = 95 % t half-width, n)",
+              "seeds": {str(s): seed_record(base / f"seed{s}") for s in seeds}}
+    (OUT / "seeds.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
+    across = json.loads((OUT / "report.json").read_text())["tasks"][TASK]["baselines"]
+    print(f"wrote {OUT}/ and docs/figures/main-job-seeds.png")
+    print(f"loss per seed {' / '.join(map(str, seeds))}; across seeds mean ± 95 % t half-width, max in per seed")
+    for b in QUOTED:
+        per, deg = [], []
+        for s in seeds:
+            m = record["seeds"][str(s)]["baselines"]
+            label = next((k for k in m if k == b or k.startswith(b + "-k")), None)
+            per.append(f"{m[label]['cost']['mean']:.3f}" if label else "-")
+            deg.append(f"{m[label]['max_in']['mean']:.2f}" if label else "-")
+        c = across.get(b, {}).get("cost")
+        print(f"  {b:20s} {' / '.join(per)}   across {c['mean']:.2f} ± {c['ci95']:.2f}   max in {' / '.join(deg)}"
+              if c else f"  {b:20s} {' / '.join(per)}")
+
+if __name__ == "__main__":
+    main()
