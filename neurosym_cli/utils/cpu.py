@@ -80,30 +80,27 @@ def cpu_flags() -> frozenset[str]:
     return frozenset()
 
 
-@functools.lru_cache(maxsize=1)
-def cpu_vendor() -> str:
-    """The CPU's vendor id (GenuineIntel, AuthenticAMD, ...) from /proc/cpuinfo; "" where it cannot be read."""
+@functools.lru_cache(maxsize=None)
+def _cpuinfo(key: str) -> str:
+    """The first value of ``key`` in /proc/cpuinfo (Linux); "" where it cannot be read."""
     try:
         with open("/proc/cpuinfo") as f:
             for line in f:
-                if line.startswith("vendor_id"):
+                if line.startswith(key):
                     return line.partition(":")[2].strip()
     except OSError:
         pass
     return ""
 
 
-@functools.lru_cache(maxsize=1)
+def cpu_vendor() -> str:
+    """The CPU's vendor id (GenuineIntel, AuthenticAMD, ...); "" where it cannot be read."""
+    return _cpuinfo("vendor_id")
+
+
 def cpu_model() -> str:
     """The CPU's model name (/proc/cpuinfo on Linux, else what platform reports)."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.partition(":")[2].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
+    return _cpuinfo("model name") or platform.processor() or platform.machine()
 
 
 def pinnable() -> bool:
