@@ -23,4 +23,6 @@ __version__ = "0.1.0"
 
 from .utils import cpu as _cpu  # noqa: E402  (stdlib only)
 
-_cpu.warn_once()  # pin the CPU kernels before anything imports torch (NEUROSYM_CPU_KERNELS, default avx2)
+# pin the CPU kernels before anything imports torch (NEUROSYM_CPU_KERNELS, default avx2); not final: the console
+# script reads its command line next, and a command its config
+_cpu.warn_once(final=False)

@@ -26,7 +26,7 @@ needs_x86 = pytest.mark.skipif(not cpu.pinnable(), reason="the AVX2 pin applies 
 
 def clean_env(tmp_path, **extra) -> dict:
     """The environment of a fresh shell: none of the pin's variables, no mode, runs under tmp_path."""
-    env = {k: v for k, v in os.environ.items() if k not in (*cpu.PIN, cpu.ENV, cpu.MARK)}
+    env = {k: v for k, v in os.environ.items() if k not in (*cpu.PIN, cpu.ENV, cpu.MARK, "NEUROSYM_MKL_WARNED")}
     return {**env, "NEUROSYM_RUNS": str(tmp_path), **extra}
 
 
@@ -265,18 +265,71 @@ def test_avx2_loads_mkls_intel_path_before_torch_and_avx2_vendor_does_not(tmp_pa
         assert r["cpu_kernels"] == mode and r["pinned"] is (mode != "native"), (mode, r)
 
 
-def test_another_vendor_without_the_library_is_warned_once(monkeypatch):
+def test_another_vendor_without_the_library_is_warned_once_and_only_for_the_final_mode(monkeypatch, capsys):
     monkeypatch.setattr(cpu, "cpu_vendor", lambda: "AuthenticAMD")
     monkeypatch.setattr(cpu, "pinnable", lambda: True)
     monkeypatch.setitem(cpu._state, "mkl_path", None)
-    monkeypatch.delenv("NEUROSYM_MKL_WARNED", raising=False)
+    monkeypatch.setitem(cpu._state, "why", "neurosym_cli/utils/_mkl_intel_path*.so was not built: reinstall")
+    monkeypatch.setitem(cpu._state, "warned", False)
+    monkeypatch.setenv("NEUROSYM_MKL_WARNED", "")  # restored (removed) at the end
+    monkeypatch.setitem(cpu._state, "mode", "avx2-vendor")
+    assert cpu._no_shim() is None  # the command line asked for another mode: nothing to say about avx2
+    monkeypatch.setitem(cpu._state, "mode", "avx2")
     msg = cpu._no_shim()
-    assert msg and msg.startswith("cpu_kernels=avx2: MKL's Intel path is not available on this AuthenticAMD CPU")
-    assert "reinstall neurosym where a C compiler is present" in msg and "\n" not in msg
+    assert msg and msg.startswith("cpu_kernels=avx2: MKL's Intel path is not in effect on this AuthenticAMD CPU ("), msg
+    assert "was not built: reinstall" in msg and "\n" not in msg
     assert cpu._no_shim() is None  # once per process tree (children inherit NEUROSYM_MKL_WARNED)
+    monkeypatch.setenv("NEUROSYM_MKL_WARNED", "")
     monkeypatch.setitem(cpu._state, "mkl_path", "intel")
-    monkeypatch.delenv("NEUROSYM_MKL_WARNED")
     assert cpu._no_shim() is None  # loaded: nothing to say
+    monkeypatch.setitem(cpu._state, "mkl_path", None)
+    cpu.warn_once("avx2", final=False)  # the import's guess: silent
+    assert capsys.readouterr().err == ""
+
+
+def test_avx2_vendor_after_torch_loaded_mkls_intel_path_is_one_warning_line(monkeypatch):
+    """An AMD user who imported neurosym_cli (avx2: the library loaded) and torch, then asks for avx2-vendor to
+    reproduce the old runs, is told that this process cannot give it."""
+    monkeypatch.setattr(cpu, "cpu_vendor", lambda: "AuthenticAMD")
+    monkeypatch.setattr(cpu, "in_effect", lambda: True)
+    monkeypatch.setitem(cpu._state, "mkl_path", "intel")
+    msg = cpu._mismatch("avx2-vendor")
+    assert msg and msg.startswith("cpu_kernels=avx2-vendor, but torch was loaded with MKL's Intel path on this "
+                                  "AuthenticAMD CPU") and "NEUROSYM_CPU_KERNELS=avx2-vendor" in msg
+    monkeypatch.setattr(cpu, "cpu_vendor", lambda: "GenuineIntel")
+    assert cpu._mismatch("avx2-vendor") is None  # on Intel the two modes compute the same
+
+
+@x86_linux
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler to build a test library")
+def test_the_installed_torch_lets_a_library_loaded_before_it_answer_mkls_vendor_check(tmp_path):
+    """What avx2 rests on: libtorch_cpu.so's MKL asks mkl_serv_intel_cpu_true through a binding that a library
+    loaded with RTLD_GLOBAL before torch takes over. Checked by effect on this machine: a library answering "not
+    Intel" changes MKL's float32 exp (its other vendor's path) against the same process without it. A torch build
+    that bound the call inside its own library would fail here."""
+    src = tmp_path / "not_intel.c"
+    src.write_text("int mkl_serv_intel_cpu_true(void) { return 0; }\n")
+    lib = tmp_path / "not_intel.so"
+    subprocess.run(["cc", "-shared", "-fPIC", str(src), "-o", str(lib)], check=True)
+    code = """
+        import ctypes, hashlib, os, sys
+        if sys.argv[1:] == ["preload"]:
+            ctypes.CDLL(os.environ["LIB"], mode=os.RTLD_GLOBAL)
+        import torch
+        x = torch.linspace(-5, 5, 100_000)
+        print(hashlib.sha1((x.exp().numpy().tobytes() + x.abs().add(1e-3).log().numpy().tobytes())).hexdigest())
+        """
+    env = clean_env(tmp_path, LIB=str(lib), ATEN_CPU_CAPABILITY="avx2", MKL_CBWR="AVX2")
+    runs = {}
+    for arg in ("plain", "preload"):
+        p = subprocess.run([sys.executable, "-c", textwrap.dedent(code), arg], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0, p.stderr
+        runs[arg] = p.stdout.strip()
+    if cpu.cpu_vendor() == "GenuineIntel":
+        assert runs["plain"] != runs["preload"], "MKL did not ask the library loaded before torch"
+    else:  # on another vendor MKL already takes its other path: the library agrees with it
+        assert runs["plain"] == runs["preload"]
 
 
 QEMU = shutil.which("qemu-x86_64")

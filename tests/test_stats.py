@@ -87,7 +87,7 @@ def test_metric_names_match_the_rollout():
 
 
 # --- seeds.py: across-seed report on hand-made seed files --------------------------------------------------------
-def seed_file(path, task, seed, costs, budget="tiny", pick=None, grid=((0.5, 2, "v1"),)):
+def seed_file(path, task, seed, costs, budget="tiny", pick=None, grid=((0.5, 2, "v1"),), machine=None):
     """A seed file in benchmarks/run_seeds.py's format: per baseline two evaluation seeds with the given losses."""
     rows = lambda c, deg: [{"seed": s, "episodes": 1, "cost": x, "max_in": deg, "max_out": deg,
                             "max_degree": 2 * deg, "mean_degree": deg, "collisions": 0.0} for s, x in enumerate(c)]
@@ -96,7 +96,7 @@ def seed_file(path, task, seed, costs, budget="tiny", pick=None, grid=((0.5, 2, 
     rec = {"task": task, "seed": seed, "budget": budget, "pick": pick or {"rules": 2, "lam": 0.5, "features": "v1"},
            "selected": {"val_seeds": 10, "synth": {"objective": "paper"}},
            "selection": [{"lam": lam, "rules": k, "features": f} for lam, k, f in grid],
-           "baselines": baselines, "machine": {"cpu_kernels": "avx2"}}
+           "baselines": baselines, "machine": machine or {"cpu_kernels": "avx2"}}
     f = path / f"{task}-seed{seed}.json"
     f.write_text(json.dumps(rec))
     return f
@@ -127,6 +127,22 @@ def test_across_seed_summary_by_hand(tmp_path):
     assert poi["tf-full"]["lo"] <= 1 / 3 <= poi["tf-full"]["hi"] and poi["no-comm"]["lo"] == 1.0
     norm, left = seeds.normalized(by_task)
     assert left == [] and norm["prog-retrained"][0] == pytest.approx([0.95, 0.95, 0.9])  # (20-10.5)/(20-10), ...
+
+
+def test_seed_files_of_before_and_after_mkls_intel_path_do_not_mix(tmp_path):
+    """A seed file of before 2026-12-03 (no mkl_path: avx2 then left MKL its vendor path, now avx2-vendor) and one
+    of today's avx2 were computed differently on AMD machines: the report refuses to mix them, naming the key."""
+    costs = {"tf-full": [9.0, 11.0], "prog-retrained": [10.0, 12.0]}
+    old = seed_file(tmp_path, "random-grid", 0, costs)
+    new = seed_file(tmp_path, "random-grid", 1, costs, machine={"cpu_kernels": "avx2", "mkl_path": "intel"})
+    assert seeds.from_seed_file(old).settings["cpu_kernels"] == "avx2-vendor"
+    assert seeds.from_seed_file(new).settings["cpu_kernels"] == "avx2"
+    resumed = tmp_path / "other"
+    resumed.mkdir()  # an oracle manifest of before the change, collected after it: mkl_path recorded as None
+    f = seed_file(resumed, "random-grid", 0, costs, machine={"cpu_kernels": "avx2", "mkl_path": None})
+    assert seeds.from_seed_file(f).settings["cpu_kernels"] == "avx2-vendor"
+    with pytest.raises(ConfigError, match="^cpu_kernels differs across training seeds"):
+        seeds.summarize(seeds.from_seed_files(tmp_path.glob("*.json"))["random-grid"])
 
 
 def test_a_single_seed_is_reported_as_such(tmp_path):

@@ -177,7 +177,7 @@ def from_seed_file(path: Path) -> SeedRun:
                       key=str)
         machine = r.get("machine") or {}
         kernels = machine.get("cpu_kernels")
-        if kernels == "avx2" and "mkl_path" not in machine:
+        if kernels == "avx2" and not machine.get("mkl_path"):
             kernels = "avx2-vendor"  # written before 2026-12-03, when avx2 left MKL its own path per CPU vendor
         settings = {"budget": r["budget"], "cpu_kernels": kernels,
                     "select.grid": [list(g) for g in grid], "select.val_seeds": sel.get("val_seeds"),

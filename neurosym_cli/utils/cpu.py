@@ -40,9 +40,10 @@ MARK = "NEUROSYM_PINNED"
 """the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
 them while a user's own settings stay"""
 
-_state: dict[str, object] = {"mode": None, "warned": False, "mkl_path": None, "shim": None}
+_state: dict[str, object] = {"mode": None, "warned": False, "mkl_path": None, "shim": None, "why": None}
 """this process: the mode applied (None: not yet), whether its warning was printed, and which MKL path it loaded
-with ("intel": the shim was loaded before torch; None: MKL's own choice), and the shim's handle while loaded"""
+with ("intel": the shim was loaded before torch; None: MKL's own choice), the shim's handle while loaded, and why
+it was not loaded"""
 
 
 def check(value: str) -> str | None:
@@ -94,8 +95,12 @@ def _cpuinfo(key: str) -> str:
 
 
 def cpu_vendor() -> str:
-    """The CPU's vendor id (GenuineIntel, AuthenticAMD, ...); "" where it cannot be read."""
-    return _cpuinfo("vendor_id")
+    """The CPU's vendor id (GenuineIntel, AuthenticAMD, ...): /proc/cpuinfo on Linux, else what platform reports
+    (Windows names it there); "" where neither says."""
+    found = _cpuinfo("vendor_id")
+    if found:
+        return found
+    return next((v for v in ("GenuineIntel", "AuthenticAMD") if v in platform.processor()), "")
 
 
 def cpu_model() -> str:
@@ -127,16 +132,22 @@ def _load_shim() -> None:
     with RTLD_GLOBAL, its mkl_serv_intel_cpu_true comes before libtorch_cpu.so's own in the lookup of every library
     loaded later. Nothing happens where the library was not built (runtime() then records MKL's own path)."""
     flags = cpu_flags()
-    if _state["mkl_path"] or not pinnable() or (flags and "fma" not in flags):
+    if _state["mkl_path"] or not pinnable():
+        return
+    if flags and "fma" not in flags:
+        _state["why"] = "this CPU has no FMA, which MKL's Intel AVX2 path needs"
         return
     path = shim_path()
     if path is None:
+        _state["why"] = (f"neurosym_cli/utils/{SHIM}*.so was not built: reinstall neurosym where a C compiler is "
+                         "present, with pip's --no-cache-dir --force-reinstall --no-deps")
         return
     import ctypes
 
     try:
         _state["shim"] = ctypes.CDLL(path, mode=os.RTLD_GLOBAL)
-    except OSError:
+    except OSError as e:
+        _state["why"] = f"{path} did not load ({e})"
         return
     _state["mkl_path"] = "intel"
 
@@ -144,12 +155,21 @@ def _load_shim() -> None:
 def _unload_shim() -> None:
     """Before torch loads: undo :func:`_load_shim` (``import neurosym_cli`` applied the environment's mode, then the
     command line asked for another)."""
-    if _state.get("shim") is None:
-        return
+    if _state.get("shim") is None or _torch_mapped():
+        return  # once libtorch_cpu.so bound MKL's call to it, unloading would leave that binding dangling
     from _ctypes import dlclose
 
     dlclose(_state.pop("shim")._handle)
     _state["mkl_path"] = None
+
+
+def _torch_mapped() -> bool:
+    """Whether torch's CPU library is in this process already (even if ``torch`` is not in sys.modules)."""
+    try:
+        with open("/proc/self/maps") as f:
+            return any("libtorch_cpu" in line for line in f)
+    except OSError:
+        return "torch" in sys.modules
 
 
 def apply(mode: str | None = None) -> str | None:
@@ -167,10 +187,8 @@ def apply(mode: str | None = None) -> str | None:
         _state["mode"] = mode
         return _mismatch(mode)
     ours = {k for k in os.environ.get(MARK, "").split(",") if k in PIN}
-    missing = None
     if mode == "avx2":
         _load_shim()
-        missing = _no_shim()
     else:
         _unload_shim()
     if mode in PINNED_MODES and pinnable():
@@ -186,24 +204,30 @@ def apply(mode: str | None = None) -> str | None:
                 del os.environ[key]
         os.environ.pop(MARK, None)
     _state["mode"] = mode
-    return missing
+    return None
 
 
-def _intel() -> bool:
-    """Whether MKL takes its Intel path in this process: the shim is loaded, or the CPU is an Intel one (or not
-    x86, where nothing of this applies)."""
-    return _state["mkl_path"] == "intel" or cpu_vendor() in ("GenuineIntel", "") or not pinnable()
+def _intel_vendor() -> bool | None:
+    """Whether the CPU is an Intel one (None: the vendor cannot be read)."""
+    return cpu_vendor() == "GenuineIntel" if cpu_vendor() else None
+
+
+def _intel() -> bool | None:
+    """Whether MKL takes its Intel path in this process: the shim is loaded or the CPU is an Intel one (True), the
+    CPU is another vendor's (False), unknown (None)."""
+    return True if _state["mkl_path"] == "intel" else _intel_vendor()
 
 
 def _no_shim() -> str | None:
-    """The warning of an avx2 process on another vendor's CPU that could not load the shim (said once per process
-    tree: children inherit the note that it was said)."""
-    if _intel() or os.environ.get("NEUROSYM_MKL_WARNED"):
+    """The warning of an avx2 process on another vendor's x86 CPU that could not load the shim: said once per
+    process tree (children inherit the note that it was said), and only where the final mode is known (the command
+    line's, a command's config), never by the import that applied the environment's."""
+    if _state["mode"] != "avx2" or not pinnable() or _intel() is not False or os.environ.get("NEUROSYM_MKL_WARNED"):
         return None
     os.environ["NEUROSYM_MKL_WARNED"] = "1"
-    return (f"cpu_kernels=avx2: MKL's Intel path is not available on this {cpu_vendor()} CPU (the library "
-            f"neurosym_cli/utils/{SHIM}*.so was not built: reinstall neurosym where a C compiler is present), so "
-            "numbers differ in the last digits from Intel machines")
+    why = _state.get("why") or "torch was loaded before cpu_kernels=avx2 took effect"
+    return (f"cpu_kernels=avx2: MKL's Intel path is not in effect on this {cpu_vendor()} CPU ({why}), so numbers "
+            "differ in the last digits from Intel machines")
 
 
 def kept() -> list[str]:
@@ -228,20 +252,21 @@ def _mismatch(mode: str) -> str | None:
             return (f"cpu_kernels={mode}, but torch was imported before the kernels could be pinned ({have}); numbers "
                     "may differ in the last digits from other machines: import neurosym_cli before torch, or set "
                     "ATEN_CPU_CAPABILITY=avx2 MKL_CBWR=AVX2 first")
-        if mode == "avx2" and not _intel():
-            return (f"cpu_kernels=avx2, but torch was imported before MKL's Intel path could be chosen on this "
-                    f"{cpu_vendor()} CPU; numbers may differ in the last digits from Intel machines: import "
-                    "neurosym_cli before torch")
-        return None
+        if mode == "avx2-vendor" and _state["mkl_path"] == "intel" and _intel_vendor() is False:
+            return (f"cpu_kernels=avx2-vendor, but torch was loaded with MKL's Intel path on this {cpu_vendor()} CPU; "
+                    f"this run uses it: set {ENV}=avx2-vendor before starting Python to keep MKL's own path")
+        return None  # avx2 without the shim: _no_shim says so
     if not pinned:
         return None
     return (f"cpu_kernels=native, but torch was loaded with the AVX2 pin ({have}); this run uses the pinned "
             f"kernels: set {ENV}=native before starting Python to opt out")
 
 
-def warn_once(mode: str | None = None) -> None:
-    """:func:`apply`, printing its warning (once per process) on stderr."""
-    msg = apply(mode)
+def warn_once(mode: str | None = None, final: bool = True) -> None:
+    """:func:`apply`, printing its warning (once per process) on stderr; ``final``: ``mode`` is the one the run
+    computes with (the command line's or a command's config, not the import's guess), so a missing MKL Intel path
+    is said too."""
+    msg = apply(mode) or (_no_shim() if final else None)
     if msg and not _state["warned"]:
         _state["warned"] = True
         print(f"neurosym: warning: {msg}", file=sys.stderr)
@@ -250,7 +275,8 @@ def warn_once(mode: str | None = None) -> None:
 def runtime() -> dict[str, object]:
     """What was in effect in this process, recorded beside every artifact: the cpu_kernels mode, torch's CPU
     capability, the variables of the pin, which of MKL's code paths ran ("intel": the shim was loaded or the CPU is
-    an Intel one; "vendor": MKL's own path for another vendor) and whether this process loaded the shim, the torch
+    an Intel one; "vendor": MKL's own path for another vendor; "unknown": the vendor cannot be read; None: not x86)
+    and whether this process loaded the shim, the torch
     version, and the CPU (vendor, model,
     machine, AVX2 and AVX-512F)."""
     import torch
@@ -261,7 +287,7 @@ def runtime() -> dict[str, object]:
         "pinned": in_effect() and torch.backends.cpu.get_cpu_capability() == "AVX2",
         "capability": torch.backends.cpu.get_cpu_capability(),
         **{key.lower(): os.environ.get(key) for key in PIN},
-        "mkl_path": "intel" if _intel() and pinnable() else "vendor",
+        "mkl_path": None if not pinnable() else {True: "intel", False: "vendor", None: "unknown"}[_intel()],
         "mkl_shim": _state["mkl_path"] == "intel",
         "cpu_vendor": cpu_vendor(),
         "torch": str(torch.__version__),  # a plain str: a checkpoint loads with weights_only=True
