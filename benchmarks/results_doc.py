@@ -51,7 +51,7 @@ sys.path.insert(0, str(ROOT))
 
 from neurosym_cli.dsl import describe, parse  # noqa: E402  (the readings come from the project's own printer)
 from neurosym_cli.schemes import SCHEMES  # noqa: E402
-from neurosym_cli.stats import mean_ci  # noqa: E402  (one Student-t interval for the page and `select`)
+from neurosym_cli.stats import mean_ci, t95  # noqa: E402  (one Student-t interval for the page and `select`)
 
 
 @functools.lru_cache(maxsize=None)
@@ -258,7 +258,7 @@ def rl(task: str, variants: dict[str, dict]) -> str:
         out.append(f"| {s['name']} | {s['cost']:g} | {'to go' if s['shaped'] else 'episode'} | "
                    f"{s['val_loss']:.2f} ± {s['val_loss_ci']:.2f} | {s['max_in']:.2f} | {s['max_out']:.2f} | "
                    f"{s['max_degree']:.2f} | {s['rollouts_per_second']:.1f} | {s['pick']} |")
-    out += ["", f"Test seeds ({v['seeds']}, the same episodes as every table of this page):", "",
+    out += ["", f"Test seeds ({v['seeds']}, the same episodes as every table of this page; {EVAL_PM}):", "",
             "| baseline | loss | max in | max out | max in+out |", "|---|---|---|---|---|"]
     rows = [b for b in ("tf-full", "hard-attn", "dist", "prog-retrained", "no-comm") if b in vs["baselines"]]
     for b in rows + ["rl1", "rl2"] + sorted(extra):
@@ -334,7 +334,7 @@ def noisy(task: str, clean: str) -> str:
     out = [f"Every directed link fails with probability {v['link_failure']:g} at every step, in training, "
            f"retraining and evaluation, for every baseline. The programs are the pick of `neurosym select` on this "
            f"task's oracle (K = {sel['rules']}, lambda = {sel['lam']:g}, {sel['features']}); {v['seeds']} test "
-           "seeds; degrees count the messages delivered.", "",
+           f"seeds; degrees count the messages delivered. Loss and degrees: {EVAL_PM}.", "",
            "| baseline | loss | max in | max out | max in+out |", "|---|---|---|---|---|"]
     for b in ORDER:
         if b in v["baselines"]:
@@ -570,7 +570,7 @@ def vmas_claims(v: dict) -> list[str]:
                  f"(paired difference {pm(d, 3)}) -> {verdict(d[0] - d[1] > 0)}")
     for m, words, other in (("max_out", "max out", "hard-attn"), ("max_degree", "max in+out", "tf-full")):
         lines.append(f"prog-retrained {words} lower than {other}: {ms(v, pr, m)} vs "
-                     f"{ms(v, other, m)} (mean ± std) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
+                     f"{ms(v, other, m)} (mean ± 95 % t half-width over the evaluation seeds) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
     for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
         if other in b:
             lower(pr, other, f"beyond the paper: prog-retrained better than {b[other]['label']}")
@@ -666,7 +666,7 @@ def selection(task: str, variants: dict[str, dict]) -> str:
     out.append("")
     vs = with_selected(v, sel)
     out += [f"Test seeds ({v['seeds']}, the same episodes as the table above), the pick against the default "
-            "configuration's programs:", "",
+            f"configuration's programs ({EVAL_PM}):", "",
             "| baseline | loss | max in | max out | mean in+out |", "|---|---|---|---|---|"]
     for b in ("tf-full", "hard-attn", "dist", "prog", "prog-retrained", "no-comm"):
         if b in ("prog", "prog-retrained"):
@@ -730,9 +730,15 @@ def mean(v: dict, b: str, k: str = "cost") -> float:
     return v["baselines"][b]["summary"][k]["mean"]
 
 
+EVAL_PM = "mean ± 95 % Student-t half-width over the evaluation seeds (the episode noise of one trained model)"
+"""what ± means in every table of one training seed's evaluation (``ms``)"""
+
+
 def ms(v: dict, b: str, k: str, digits: int = 2) -> str:
+    """A baseline's metric over the evaluation seeds as the tables write it: mean ± 95 % t half-width (EVAL_PM)."""
     s = v["baselines"][b]["summary"][k]
-    return f"{s['mean']:.{digits}f} ± {s['std']:.{digits}f}"
+    half = t95(v["seeds"]) * s["std"] / v["seeds"] ** 0.5
+    return f"{s['mean']:.{digits}f} ± {half:.{digits}f}"
 
 
 def paired(v: dict, a: str, b: str) -> tuple[float, float]:
@@ -854,7 +860,7 @@ def title(name: str, v: dict) -> str:
 def section(name: str, v: dict) -> str:
     task = v["task"]
     out = [f"## {title(name, v)}", "", f"K = {v['rules']}, lambda = {v['lam']:g}, objective {v['objective']}, "
-           f"{v['seeds']} evaluation seeds; loss and degrees: mean ± std over the seeds.", "",
+           f"{v['seeds']} evaluation seeds; loss and degrees: {EVAL_PM}.", "",
            "| baseline | loss | max in | max out | mean in+out |", "|---|---|---|---|---|"]
     digits = 3 if task == "unlabeled-goals" else 2
     for b in sorted(v["baselines"], key=lambda b: ORDER.index(b) if b in ORDER else len(ORDER)):
