@@ -37,9 +37,11 @@ def short_labels(labels: Sequence[str]) -> list[str]:
         out.append("-".join([b, *[x for x in mine if x and x not in shared]]) or lbl)
     return out if len(set(out)) == len(out) else list(labels)
 
-def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsize: float = 7) -> None:
-    """Label each point (xs[k], ys[k]) right of it; labels that would overprint another label or marker are moved
-    up, with a leader line to their point. Call after the axes limits are final."""
+def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsize: float = 7,
+                 avoid: Sequence[tuple[float, float]] = ()) -> None:
+    """Label each point (xs[k], ys[k]) right of it; labels that would overprint another label or marker (the
+    points, and ``avoid``: other markers drawn, as (x, y)) are moved up, with a leader line to their point. Call
+    after the axes limits are final."""
     import numpy as np
 
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
@@ -48,7 +50,8 @@ def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsi
     def clash(k: int, w: float, ly: float) -> float | None:
         """The y of a label or another marker that point k's label [x, x + w] at height ly would overprint."""
         x = xs[k]
-        boxes = placed + [(px, py, 0.0) for i, (px, py) in enumerate(zip(xs, ys)) if i != k]
+        boxes = placed + [(px, py, 0.0) for i, (px, py) in enumerate(zip(xs, ys)) if i != k] + \
+            [(px, py, 0.0) for px, py in avoid]
         hits = [py for px, py, pw in boxes if px - 0.02 * (x1 - x0) <= x + w and x <= px + pw + 0.02 * (x1 - x0)
                 and abs(ly - py) < gap]
         return max(hits) if hits else None
@@ -330,7 +333,7 @@ def seeds_plane(points: Mapping[str, Sequence[tuple[int, float, float]]], across
     if cut:
         ax.text(0.99, 0.01, "intervals beyond the frame are cut: " + ", ".join(cut), transform=ax.transAxes,
                 ha="right", va="bottom", fontsize=6.5, color="0.35", wrap=True)
-    place_labels(ax, xs, ys, names, cols)
+    place_labels(ax, xs, ys, names, cols, avoid=[(x, y) for pts in points.values() for _, x, y in pts])
     handles = [Line2D([], [], ls="", marker="o", ms=7, color="0.3",
                       label="mean over training seeds ± 95 % t-interval")]
     handles += [Line2D([], [], ls="", marker=marker[s], ms=5, mfc="none", mec="0.3", label=f"training seed {s}")
