@@ -59,14 +59,12 @@ def main() -> None:
     for name in ("report.json", "report.csv", "improvement.csv"):
         shutil.copyfile(base / name, OUT / name)
     shutil.copyfile(base / f"seeds-{TASK}.png", ROOT / "docs" / "figures" / "main-job-seeds.png")
-    from neurosym_cli.utils.cpu import runtime
+    from run_seeds import machine  # the oracle manifest's runtime record (this script's folder is on sys.path)
 
-    rt = runtime()
     record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))}",
               "date": datetime.date.today().isoformat(),
-              "machine": {"cores": os.cpu_count(), "cpu": rt["cpu"], "cpu_vendor": rt["cpu_vendor"],
-                          "cpu_kernels": rt["cpu_kernels"], "mkl_path": rt["mkl_path"], "processor": platform.machine(),
-                          "threads": "0 (torch's default: the cores)", "torch": rt["torch"]},
+              "machine": {**machine(base / f"seed{seeds[0]}"), "cores": os.cpu_count(),
+                          "processor": platform.machine(), "threads": "0 (torch's default: the cores)"},
               "note": "per training seed: each baseline's summary over 20 evaluation seeds (mean, std ddof 1, "
                       "ci95 = 95 % t half-width, n)",
               "seeds": {str(s): seed_record(base / f"seed{s}") for s in seeds}}

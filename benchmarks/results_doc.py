@@ -570,7 +570,7 @@ def vmas_claims(v: dict) -> list[str]:
                  f"(paired difference {pm(d, 3)}) -> {verdict(d[0] - d[1] > 0)}")
     for m, words, other in (("max_out", "max out", "hard-attn"), ("max_degree", "max in+out", "tf-full")):
         lines.append(f"prog-retrained {words} lower than {other}: {ms(v, pr, m)} vs "
-                     f"{ms(v, other, m)} (mean ± 95 % t half-width over the evaluation seeds) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
+                     f"{ms(v, other, m)} (mean ± 95 % t half-width) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
     for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
         if other in b:
             lower(pr, other, f"beyond the paper: prog-retrained better than {b[other]['label']}")

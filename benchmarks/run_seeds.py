@@ -38,10 +38,10 @@ from pathlib import Path
 
 from neurosym_cli.schemes import SCHEMES
 from neurosym_cli.schemes.searched import Searched  # runs under a program or a tree
+from neurosym_cli.utils.cpu import PIN  # what the pinned modes set (the console script sets it in every job too)
 
 ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("random-cross", "random-grid", "unlabeled-goals")
-PIN = {"ATEN_CPU_CAPABILITY": "avx2", "MKL_CBWR": "AVX2"}
 KEEP_SELECT = ("name", "lam", "rules", "features", "objective", "l1", "degree_term", "loss", "degree", "max_in",
                "max_out")
 
@@ -94,9 +94,9 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
 
 def machine(exp: Path) -> dict:
     """What the oracle of a run directory trained with (its manifest's runtime record): the cpu_kernels mode, MKL's
-    path, the CPU's vendor and model."""
+    path, the CPU's vendor and model, the torch version."""
     rt = json.loads((exp / "train" / "oracle" / "manifest.json").read_text()).get("runtime") or {}
-    return {k: rt.get(k) for k in ("cpu_kernels", "mkl_path", "cpu_vendor", "cpu")}
+    return {k: rt.get(k) for k in ("cpu_kernels", "mkl_path", "cpu_vendor", "cpu", "torch")}
 
 
 STASH_MAX = 1 << 20

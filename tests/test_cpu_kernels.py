@@ -268,7 +268,7 @@ def test_avx2_loads_mkls_intel_path_before_torch_and_avx2_vendor_does_not(tmp_pa
 def test_another_vendor_without_the_library_is_warned_once_and_only_for_the_final_mode(monkeypatch, capsys):
     monkeypatch.setattr(cpu, "cpu_vendor", lambda: "AuthenticAMD")
     monkeypatch.setattr(cpu, "pinnable", lambda: True)
-    monkeypatch.setitem(cpu._state, "mkl_path", None)
+    monkeypatch.setitem(cpu._state, "shim", None)
     monkeypatch.setitem(cpu._state, "why", "neurosym_cli/utils/_mkl_intel_path*.so was not built: reinstall")
     monkeypatch.setitem(cpu._state, "warned", False)
     monkeypatch.setenv("NEUROSYM_MKL_WARNED", "")  # restored (removed) at the end
@@ -280,9 +280,9 @@ def test_another_vendor_without_the_library_is_warned_once_and_only_for_the_fina
     assert "was not built: reinstall" in msg and "\n" not in msg
     assert cpu._no_shim() is None  # once per process tree (children inherit NEUROSYM_MKL_WARNED)
     monkeypatch.setenv("NEUROSYM_MKL_WARNED", "")
-    monkeypatch.setitem(cpu._state, "mkl_path", "intel")
+    monkeypatch.setitem(cpu._state, "shim", object())
     assert cpu._no_shim() is None  # loaded: nothing to say
-    monkeypatch.setitem(cpu._state, "mkl_path", None)
+    monkeypatch.setitem(cpu._state, "shim", None)
     cpu.warn_once("avx2", final=False)  # the import's guess: silent
     assert capsys.readouterr().err == ""
 
@@ -292,7 +292,7 @@ def test_avx2_vendor_after_torch_loaded_mkls_intel_path_is_one_warning_line(monk
     reproduce the old runs, is told that this process cannot give it."""
     monkeypatch.setattr(cpu, "cpu_vendor", lambda: "AuthenticAMD")
     monkeypatch.setattr(cpu, "in_effect", lambda: True)
-    monkeypatch.setitem(cpu._state, "mkl_path", "intel")
+    monkeypatch.setitem(cpu._state, "shim", object())
     msg = cpu._mismatch("avx2-vendor")
     assert msg and msg.startswith("cpu_kernels=avx2-vendor, but torch was loaded with MKL's Intel path on this "
                                   "AuthenticAMD CPU") and "NEUROSYM_CPU_KERNELS=avx2-vendor" in msg

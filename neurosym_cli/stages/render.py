@@ -41,13 +41,13 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     and episode<k>-frames.png (four frames of the animation); with render.window=[x0,x1,y0,y1] (a zoom) the names
     are episode<k>-window<x0>_<x1>_<y0>_<y1>.*, so a zoom never replaces the whole picture."""
     from ..viz.animate import animate, edge_style, episode_png
-    from ..viz.draw import in_window
+    from ..viz.crowd import window_receivers
 
     if cfg.render.round > cfg.task.rounds:
         raise ConfigError(f"render.round={cfg.render.round}, but {cfg.task.name} has {cfg.task.rounds} round(s)")
     rec, title = record(cfg)
     window = cfg.render.window
-    if window is not None and not any(in_window(window, p).any() for p in rec.pos):
+    if window is not None and not window_receivers(rec, window).any():  # no agent ever enters it
         lo, hi = rec.pos.reshape(-1, 2).min(0), rec.pos.reshape(-1, 2).max(0)
         raise ConfigError(f"no agent of episode {cfg.episode} enters render.window={window}; its agents move in x in "
                           f"[{lo[0]:.1f}, {hi[0]:.1f}], y in [{lo[1]:.1f}, {hi[1]:.1f}]: choose a window there, or "

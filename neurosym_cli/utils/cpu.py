@@ -40,10 +40,9 @@ MARK = "NEUROSYM_PINNED"
 """the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
 them while a user's own settings stay"""
 
-_state: dict[str, object] = {"mode": None, "warned": False, "mkl_path": None, "shim": None, "why": None}
-"""this process: the mode applied (None: not yet), whether its warning was printed, and which MKL path it loaded
-with ("intel": the shim was loaded before torch; None: MKL's own choice), the shim's handle while loaded, and why
-it was not loaded"""
+_state: dict[str, object] = {"mode": None, "warned": False, "shim": None, "why": None}
+"""this process: the mode applied (None: not yet), whether its warning was printed, the shim's handle while it is
+loaded (MKL then takes its Intel path), and why it was not loaded"""
 
 
 def check(value: str) -> str | None:
@@ -132,7 +131,7 @@ def _load_shim() -> None:
     with RTLD_GLOBAL, its mkl_serv_intel_cpu_true comes before libtorch_cpu.so's own in the lookup of every library
     loaded later. Nothing happens where the library was not built (runtime() then records MKL's own path)."""
     flags = cpu_flags()
-    if _state["mkl_path"] or not pinnable():
+    if _state["shim"] is not None or not pinnable():
         return
     if flags and "fma" not in flags:
         _state["why"] = "this CPU has no FMA, which MKL's Intel AVX2 path needs"
@@ -148,8 +147,6 @@ def _load_shim() -> None:
         _state["shim"] = ctypes.CDLL(path, mode=os.RTLD_GLOBAL)
     except OSError as e:
         _state["why"] = f"{path} did not load ({e})"
-        return
-    _state["mkl_path"] = "intel"
 
 
 def _unload_shim() -> None:
@@ -159,8 +156,8 @@ def _unload_shim() -> None:
         return  # once libtorch_cpu.so bound MKL's call to it, unloading would leave that binding dangling
     from _ctypes import dlclose
 
-    dlclose(_state.pop("shim")._handle)
-    _state["mkl_path"] = None
+    dlclose(_state["shim"]._handle)
+    _state["shim"] = None
 
 
 def _torch_mapped() -> bool:
@@ -174,7 +171,8 @@ def _torch_mapped() -> bool:
 
 def apply(mode: str | None = None) -> str | None:
     """Put ``mode`` (default: :func:`requested`) in effect for this process and its children. Before torch is
-    imported it sets (avx2) or clears (native) the variables of ``PIN``; once torch is loaded nothing can change,
+    imported it sets (avx2, avx2-vendor) or clears (native) the variables of ``PIN`` and loads (avx2) or unloads
+    the shim; once torch is loaded nothing can change,
     so it returns a one-line warning when what torch loaded with differs from ``mode`` (else None). An unknown mode
     is left to the caller's check (the console script and RunConfig reject it in one line)."""
     mode = mode or requested()
@@ -215,7 +213,7 @@ def _intel_vendor() -> bool | None:
 def _intel() -> bool | None:
     """Whether MKL takes its Intel path in this process: the shim is loaded or the CPU is an Intel one (True), the
     CPU is another vendor's (False), unknown (None)."""
-    return True if _state["mkl_path"] == "intel" else _intel_vendor()
+    return True if _state["shim"] is not None else _intel_vendor()
 
 
 def _no_shim() -> str | None:
@@ -252,7 +250,7 @@ def _mismatch(mode: str) -> str | None:
             return (f"cpu_kernels={mode}, but torch was imported before the kernels could be pinned ({have}); numbers "
                     "may differ in the last digits from other machines: import neurosym_cli before torch, or set "
                     "ATEN_CPU_CAPABILITY=avx2 MKL_CBWR=AVX2 first")
-        if mode == "avx2-vendor" and _state["mkl_path"] == "intel" and _intel_vendor() is False:
+        if mode == "avx2-vendor" and _state["shim"] is not None and _intel_vendor() is False:
             return (f"cpu_kernels=avx2-vendor, but torch was loaded with MKL's Intel path on this {cpu_vendor()} CPU; "
                     f"this run uses it: set {ENV}=avx2-vendor before starting Python to keep MKL's own path")
         return None  # avx2 without the shim: _no_shim says so
@@ -276,9 +274,8 @@ def runtime() -> dict[str, object]:
     """What was in effect in this process, recorded beside every artifact: the cpu_kernels mode, torch's CPU
     capability, the variables of the pin, which of MKL's code paths ran ("intel": the shim was loaded or the CPU is
     an Intel one; "vendor": MKL's own path for another vendor; "unknown": the vendor cannot be read; None: not x86)
-    and whether this process loaded the shim, the torch
-    version, and the CPU (vendor, model,
-    machine, AVX2 and AVX-512F)."""
+    and whether this process loaded the shim, the torch version, and the CPU (vendor, model, machine, AVX2 and
+    AVX-512F)."""
     import torch
 
     flags = cpu_flags()
@@ -288,7 +285,7 @@ def runtime() -> dict[str, object]:
         "capability": torch.backends.cpu.get_cpu_capability(),
         **{key.lower(): os.environ.get(key) for key in PIN},
         "mkl_path": None if not pinnable() else {True: "intel", False: "vendor", None: "unknown"}[_intel()],
-        "mkl_shim": _state["mkl_path"] == "intel",
+        "mkl_shim": _state["shim"] is not None,
         "cpu_vendor": cpu_vendor(),
         "torch": str(torch.__version__),  # a plain str: a checkpoint loads with weights_only=True
         "cpu": cpu_model(),

@@ -59,7 +59,6 @@ class _Scene(BlitScene):
         self.rec, self.style, self.round, self.trail = rec, style, round_, trail
         self.deg_in, self.deg_out = rec.degrees()
         xlim, ylim, ratio = view_limits(window, rec.pos, rec.goal)
-        ratio = float(np.clip(ratio, 0.75, 2.0))  # a window of any shape: equal axes leave the rest blank
         self.fig, ax = plt.subplots(figsize=(max(size, size * ratio ** 0.5), size / ratio ** 0.5 + 1.2), dpi=dpi)
         self.ax = ax
         colors = group_color(rec.group) if rec.labelled else ["#4e79a7"] * rec.n_agents

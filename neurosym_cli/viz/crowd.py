@@ -50,7 +50,6 @@ class CrowdScene(BlitScene):
                                                     else [GROUP_COLORS[0]] * rec.n_agents)])  # (N, 4)
         self.drawn = self.total = 0
         xlim, ylim, ratio = view_limits(window, rec.pos, rec.goal, ratio=(0.75, 5.0))  # fronts are long and thin
-        ratio = float(np.clip(ratio, 0.75, 5.0))  # a window of any shape: equal axes leave the rest blank
         self.fig, ax = plt.subplots(figsize=(width, width / ratio + 1.5), dpi=dpi)
         self.ax = ax
         ax.set_xlim(*xlim)

@@ -57,11 +57,12 @@ def frame_limits(*points: np.ndarray, margin: float = 0.06, ratio: tuple[float, 
 
 def view_limits(window: list[float] | None, *points: np.ndarray, ratio: tuple[float, float] = (0.75, 2.0)):
     """``frame_limits`` of the points, or the ``window`` [x0, x1, y0, y1] (render.window) when given:
-    ((x0, x1), (y0, y1)), width / height."""
+    ((x0, x1), (y0, y1)), and the figure's width / height within ``ratio`` (a window of any shape: equal axes
+    leave the rest blank)."""
     if window is None:
         return frame_limits(*points, ratio=ratio)
     x0, x1, y0, y1 = window
-    return (x0, x1), (y0, y1), float((x1 - x0) / (y1 - y0))
+    return (x0, x1), (y0, y1), float(np.clip((x1 - x0) / (y1 - y0), *ratio))
 
 
 def in_window(window: list[float] | None, pos: np.ndarray) -> np.ndarray:
