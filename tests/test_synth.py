@@ -1,6 +1,7 @@
 """Synthesis: cached incremental scoring equals a full forward pass; MCMC recovers a planted program."""
 
 import random
+from pathlib import Path
 
 import pytest
 import torch
@@ -19,6 +20,7 @@ from neurosym_cli.synth.objective import CachedScorer
 from neurosym_cli.synth.search import feature_quantiles
 
 CPU = torch.device("cpu")
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _setup(task=None, rounds=1, rollouts=6):
@@ -421,3 +423,42 @@ def test_a_one_feature_or_that_covers_the_range_always_holds_and_a_negative_dist
     simple, notes = simplify_static(rules, v)
     assert [rule_text(r) for r in simple] == ["argmax(map(-1.0*d, filter(true, l)))", "random(filter(gd <= 3.0, l))"]
     assert "rule 2: dropped" in notes[0] and "never fires" in notes[0] and len(notes) == 3
+
+
+@pytest.mark.parametrize("backend", ["numba", "torch"])
+def test_large_data_fallback_scores_as_the_cached_messages_on_a_4_wide_task(backend, monkeypatch):
+    """Beyond prepared.MESSAGES_MAX_PAIRS the scorer recomputes the picked messages from the pair observations
+    instead of gathering cached ones; on the ring example (Dp = 4) both paths, and the full forward pass, give the
+    same scores (before, the fallback read the pair observations as 2-wide rows)."""
+    from neurosym_cli.synth import kernels, prepared
+
+    if backend == "numba" and not kernels.AVAILABLE:
+        pytest.skip("numba not installed")
+    monkeypatch.syspath_prepend(str(ROOT / "examples" / "ring"))
+    from ring import RingConfig, RingTask
+
+    env = RingTask(RingConfig(horizon=6, agents_per_group=5))
+    assert env.pair_dim == 4
+    torch.manual_seed(0)
+    pol = CommTransformer.for_task(env, ModelConfig()).eval()
+    data = collect(env, pol, 3, 2, torch.Generator().manual_seed(0), CPU)
+
+    def scorer():
+        return CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU,
+                            backend=backend)
+
+    cached = scorer()
+    monkeypatch.setattr(prepared, "MESSAGES_MAX_PAIRS", 0)
+    fallback = scorer()
+    assert cached.data[0].messages is not None and fallback.data[0].messages is None
+    space = _space(cached, 2)
+    rng = random.Random(0)
+    rules = random_rules(space, rng)
+    for _ in range(15):
+        a, b = cached.score(rules), fallback.score(rules)
+        full = fallback.full_score(Program((rules,)))
+        assert abs(a.l1 - b.l1) <= 1e-4 * max(1.0, a.l1) and abs(b.l1 - full.l1) <= 1e-4 * max(1.0, full.l1)
+        assert a.degree == b.degree
+        cached.accept()
+        fallback.accept()
+        rules, _ = propose(rules, space, rng)

@@ -186,7 +186,8 @@ class CachedScorer:
             msg = d.messages.index_select(0, pair).view(*pk.shape, -1)  # (M, K, D) messages projected by W_o
         else:
             s_n = (rows - rows % n)[:, None]  # (M, 1): s * N
-            o_ji = d.rel.reshape(-1, 2).index_select(0, ((s_n + pk) * n + (rows % n)[:, None]).flatten())
+            pair_rows = d.rel.reshape(-1, d.rel.shape[-1])  # (S N N, Dp): Dp is the task's pair_dim
+            o_ji = pair_rows.index_select(0, ((s_n + pk) * n + (rows % n)[:, None]).flatten())
             vals = d.values.reshape(-1, d.values.shape[-1]).index_select(0, (s_n + pk).flatten())
             msg = F.linear(layer.message(vals, o_ji), layer.out.weight).view(*pk.shape, -1)
         # the policy's own attention over the picked agents (section 3.3), on cached logits and projected messages;

@@ -14,6 +14,9 @@ from ..policy.transformer import CommTransformer, selected_attention
 from .dataset import DataBucket
 
 MEMO = 4  # memo slots per agent
+# the projected message of every pair is cached when there are at most this many pairs (S N N; 32M is ~2 GB);
+# beyond it the scorer recomputes the K picked messages per agent from the values and pair observations
+MESSAGES_MAX_PAIRS = 32_000_000
 
 
 class Prepared:
@@ -39,10 +42,10 @@ class Prepared:
         self.base = (x + layer.out.bias).reshape(-1, x.shape[-1])  # (S N, D)
         self.values = layer.value(x)  # (S, N, D)
         self.others = others
-        # the projected message of every pair, when it fits (<= 32M pairs, ~2 GB): scoring then gathers K
+        # the projected message of every pair, when it fits (MESSAGES_MAX_PAIRS): scoring then gathers K
         # messages per agent instead of recomputing them
         self.messages: Tensor | None = None
-        if self.s * self.n * self.n <= 32_000_000:
+        if self.s * self.n * self.n <= MESSAGES_MAX_PAIRS:
             self.messages = torch.cat([
                 F.linear(layer.message(self.values[c:c + ch, None, :, :],
                                        self.rel[c:c + ch].transpose(1, 2)),  # [i, j] = m_j->i from o_ji
