@@ -4,6 +4,7 @@ check that the seeds were run alike (see the package docstring)."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -87,11 +88,37 @@ def _key_of(baseline: str, found: list[tuple[str, dict]], pick: dict | None, lab
     return label
 
 
-def _rows(per_seed: Any, where: str) -> list[dict[str, float]]:
+def non_finite(rows: Iterable[Any], metrics: Sequence[str] = METRICS) -> str | None:
+    """Where the first nan or inf among the ``metrics`` of per-evaluation-seed rows is ("cost of evaluation seed 3
+    is nan"), or None. JSON readers accept NaN and Infinity, and one of them turns every mean, interval, IQM and
+    Pareto front it enters into nan or inf that print as results."""
+    for i, r in enumerate(rows):
+        if not isinstance(r, dict):
+            continue
+        for m in metrics:
+            v = r.get(m)
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and not math.isfinite(v):
+                return f"{m} of evaluation seed {r.get('seed', i)} is {v}"
+    return None
+
+
+NOT_A_RESULT = "not a result, and no table, interval or Pareto front is computed over it"
+"""why a nan or inf in an evaluation is refused, said in every such error"""
+
+
+def refuse_non_finite(rows: Iterable[Any], where: str, again: str) -> None:
+    """One ArtifactError naming ``where`` and the key when a row holds a nan or inf; ``again``: what to do."""
+    bad = non_finite(rows)
+    if bad:
+        raise ArtifactError(f"{where}: {bad}, {NOT_A_RESULT}; {again}")
+
+
+def _rows(per_seed: Any, where: str, again: str = "evaluate it again") -> list[dict[str, float]]:
     if not (isinstance(per_seed, list) and per_seed
             and all(isinstance(r, dict) and all(isinstance(r.get(m), (int, float)) for m in SHARED)
                     for r in per_seed)):
         raise ArtifactError(f"{where} has no per-evaluation-seed rows with {', '.join(SHARED)}; evaluate it again")
+    refuse_non_finite(per_seed, where, again)
     return [{m: float(r[m]) for m in METRICS if isinstance(r.get(m), (int, float))} | {"seed": r.get("seed")}
             for r in per_seed]
 
@@ -146,7 +173,8 @@ def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
         key = _key_of(b, by_baseline[b], pick, label, c)
         picked = bool(c.get("selected")) or (pick is not None and all(c.get(k) == pick[k] for k in pick))
         flat = {"picked by select": picked, **{k: v for k, v in flatten(c).items() if not _ignored(k, picked)}}
-        entries[key] = Entry(label, _rows(per_seed, str(f)), flat)
+        entries[key] = Entry(label, _rows(per_seed, str(f), f"delete it and run {_remake(seed_dir, 'eval', files)} "
+                                          "for that baseline, or leave this seed out of report_dir"), flat)
         seed = c.get("seed", seed)
         task = task or (c.get("task") or {}).get("name", "")
         settings.setdefault("budget", (c.get("budget") or {}).get("name"))
@@ -170,7 +198,9 @@ def from_seed_file(path: Path) -> SeedRun:
     """One committed seed file (benchmarks/run_seeds.py's ``collect``)."""
     try:
         r = json.loads(Path(path).read_text())
-        entries = {b: Entry(e["label"], _rows(e["per_seed"], f"{path} ({b})"), {})
+        entries = {b: Entry(e["label"], _rows(e["per_seed"], f"{path} (baseline {b})", "run that seed again "
+                                              "(benchmarks/run_seeds.py), or move the file out of report.seed_files"),
+                            {})
                    for b, e in r["baselines"].items()}
         sel = r.get("selected") or {}
         grid = sorted({(p.get("lam"), p.get("rules"), p.get("features")) for p in r.get("selection") or []},

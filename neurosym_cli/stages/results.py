@@ -3,6 +3,7 @@ a (task, budget), in the paper's order (``schemes.SCHEMES``), as tables and Figu
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from .. import paths, schemes
@@ -31,8 +32,17 @@ def _evaluation(m: object) -> bool:
 
 
 def _metrics(path: Path, remake: str) -> dict:
-    """One metrics.json, checked for the fields the tables read; ``remake``: the command that writes it again."""
-    return read_json(path, remake, _evaluation)
+    """One metrics.json, checked for the fields the tables read and for a nan or inf in them (a hand-edited or
+    foreign file: `neurosym eval` writes none); ``remake``: the command that writes it again."""
+    from ..seeds.read import NOT_A_RESULT, non_finite
+
+    m = read_json(path, remake, _evaluation)
+    bad = next((f"summary.{k}.{f} is {v}" for k, st in m["summary"].items() if isinstance(st, dict)
+                for f, v in st.items() if isinstance(v, float) and not math.isfinite(v)), None)
+    bad = bad or non_finite(m.get("per_seed") if isinstance(m.get("per_seed"), list) else [])
+    if bad:
+        raise ArtifactError(f"{path}: {bad}, {NOT_A_RESULT}: delete it and run `{remake}`, which writes it again")
+    return m
 
 
 def _eval_interval(m: dict) -> dict:
