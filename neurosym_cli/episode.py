@@ -16,8 +16,10 @@ import torch
 
 from .tasks.base import Rng, Task, TaskState, require
 from .tasks.pairs import close_pairs
-from .policy.comm import CommContext, CommProvider
+from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer, Heard
+from .rollout import rollout
+from .step import Step
 from .utils.seeding import STREAM_EVAL, generator
 
 
@@ -157,23 +159,6 @@ class EpisodeRecord:
         return self.edges.degrees()
 
 
-class _Recorder:
-    """A provider that passes everything through and keeps the picks it handed out (the rule of each edge)."""
-
-    def __init__(self, inner: CommProvider):
-        self.inner, self.name = inner, inner.name
-        self.picked: list[torch.Tensor] = []
-
-    def select(self, ctx: CommContext, logits: torch.Tensor, round: int) -> torch.Tensor:
-        return self.inner.select(ctx, logits, round)
-
-    def picks(self, ctx: CommContext, round: int) -> torch.Tensor | None:
-        p = self.inner.picks(ctx, round)
-        if p is not None:
-            self.picked.append(p)
-        return p
-
-
 def protocol_episode(env: Task, index: int, max_seeds: int = 1000) -> tuple[TaskState, torch.Generator, int]:
     """Episode ``index`` of the evaluation protocol: (its state (B = 1), its generator, its evaluation seed)."""
     if index < 0:
@@ -208,6 +193,27 @@ def _colliding(pos: torch.Tensor, dist: float) -> torch.Tensor:
     return out
 
 
+class _EpisodeTape:
+    """The recorder of one episode (B = 1): what ``EpisodeRecord`` keeps of each step."""
+
+    def __init__(self, state: TaskState, collision_dist: float):
+        self.dist_c = collision_dist
+        self.pos, self.inputs, self.edges, self.collide = [state.pos[0].cpu()], [], [], []
+        self.picks: list[list[torch.Tensor]] = []  # per step with picks in every round: per round (N, K_r)
+        self.rounds = 0
+        self.state = state  # the latest state (the final one once the episode is done)
+
+    def __call__(self, s: Step) -> None:
+        self.inputs.append(s.obs.agent[0].cpu())
+        self.pos.append(s.state.pos[0].cpu())
+        programs = bool(s.picks) and all(p is not None for p in s.picks)
+        self.edges += [round_edges(h, s.picks[r] if programs else None) for r, h in enumerate(s.out.heard)]
+        if programs:
+            self.picks.append([p[0].to(torch.int32).cpu() for p in s.picks])  # type: ignore[union-attr]
+        self.collide.append(_colliding(s.state.pos, self.dist_c))
+        self.rounds, self.state = len(s.out.heard), s.state
+
+
 @torch.no_grad()
 def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState,
                    gen: torch.Generator, device: torch.device, horizon: int | None = None) -> EpisodeRecord:
@@ -215,31 +221,16 @@ def record_episode(env: Task, policy: CommTransformer, comm: CommProvider, state
     horizon = horizon or env.horizon
     was_training = policy.training
     policy.eval()
-    rec = _Recorder(comm)
-    rng = Rng([gen], device)
     state = state.to(device)
-    pos, inputs, edges, costs, collide, picks = [state.pos[0].cpu()], [], [], [], [], []
-    dist_c = float(getattr(getattr(env, "cfg", None), "collision_dist", 0.0))
-    for t in range(horizon):
-        obs = env.observe(state, rng)
-        inputs.append(obs.agent[0].cpu())
-        ctx = CommContext(env, state, obs, rng, t)
-        rec.picked.clear()
-        out = policy(obs, lambda logits, r: rec.select(ctx, logits, r), lambda r: rec.picks(ctx, r))
-        state = env.step(state, out.action)
-        costs.append(float(env.cost(state, out.action)[0]))
-        pos.append(state.pos[0].cpu())
-        programs = bool(rec.picked) and len(rec.picked) == len(out.heard)
-        edges += [round_edges(h, rec.picked[r] if programs else None) for r, h in enumerate(out.heard)]
-        if programs:
-            picks.append([p[0].to(torch.int32).cpu() for p in rec.picked])  # per round (N, K_r)
-        collide.append(_colliding(state.pos, dist_c))
+    tape = _EpisodeTape(state, float(getattr(getattr(env, "cfg", None), "collision_dist", 0.0)))
+    traj = rollout(env, policy, comm, state, Rng([gen], device), horizon, stats=False, record=tape)
     policy.train(was_training)
-    scene = require(env, "scene", "drawing an episode")(state)
+    scene = require(env, "scene", "drawing an episode")(tape.state)
+    programs = len(tape.picks) == horizon
     return EpisodeRecord(
-        pos=torch.stack(pos).numpy(), inputs=torch.stack(inputs).float().numpy(), goal=scene.goal.cpu().numpy(),
-        group=scene.group.cpu().numpy(),
-        edges=stack_edges(state.n_agents, len(out.heard), edges, programs=len(picks) == horizon),
-        picks=_pad_picks(picks) if len(picks) == horizon else None,
-        cost=np.asarray(costs), collide=torch.stack(collide).numpy(), labelled=scene.labelled,
+        pos=torch.stack(tape.pos).numpy(), inputs=torch.stack(tape.inputs).float().numpy(),
+        goal=scene.goal.cpu().numpy(), group=scene.group.cpu().numpy(),
+        edges=stack_edges(state.n_agents, tape.rounds, tape.edges, programs=programs),
+        picks=_pad_picks(tape.picks) if programs else None,
+        cost=traj.cost[:, 0].double().cpu().numpy(), collide=torch.stack(tape.collide).numpy(), labelled=scene.labelled,
     )

@@ -8,8 +8,9 @@ import torch
 from torch import Tensor
 
 from .tasks.base import TaskState, Task, Rng
-from .policy.comm import CommContext, CommProvider
+from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer, Heard
+from .step import Recorder, step
 
 
 @dataclass
@@ -63,21 +64,24 @@ def rollout(
     horizon: int,
     detach_state: bool = False,
     stats: bool = True,
+    *,
+    record: Recorder | None = None,
 ) -> Trajectory:
-    """Run ``horizon`` steps from ``state``. Gradients flow through the dynamics unless torch.no_grad is active
-    or ``detach_state`` cuts them between steps. ``stats=False`` skips the degree and task metric records
-    (training needs only the cost; degrees are then zeros)."""
+    """Run ``horizon`` steps (``step.step``) from ``state``. Gradients flow through the dynamics unless
+    torch.no_grad is active or ``detach_state`` cuts them between steps. ``stats=False`` skips the degree and task
+    metric records (training needs only the cost; degrees are then zeros). ``record`` sees every ``Step`` after it
+    is done (an episode's pictures, the synthesis dataset, golden vectors)."""
     costs, records, decisions = [], [], []
     extra: dict[str, list[Tensor]] = {}
     pop = getattr(comm, "pop_step", None)  # providers whose decisions are actions (policy/gated.py)
     for t in range(horizon):
         if detach_state:
             state = state.detach()
-        obs = env.observe(state, rng)
-        ctx = CommContext(env, state, obs, rng, t)
-        out = policy(obs, lambda logits, r: comm.select(ctx, logits, r), lambda r: comm.picks(ctx, r))
-        state = env.step(state, out.action)
-        costs.append(env.cost(state, out.action))
+        s = step(env, policy, comm, state, rng, t)
+        state, out = s.state, s.out
+        costs.append(s.cost)
+        if record is not None:
+            record(s)
         if pop is not None and (d := pop()) is not None:
             decisions.append(d)
         if stats:

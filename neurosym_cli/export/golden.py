@@ -16,6 +16,7 @@ the task applied. golden.npz holds arrays (numpy, no pickles), golden.json says 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,6 +27,7 @@ from ..episode import protocol_episode
 from ..policy.comm import CommContext, CommProvider
 from ..policy.transformer import CommTransformer
 from ..rollout import rollout
+from ..step import Step
 from ..tasks.base import Rng, Task
 
 FORMAT = "neurosym-golden/1"
@@ -58,24 +60,22 @@ class _TapComm:
 
     def picks(self, ctx: CommContext, round: int) -> torch.Tensor | None:
         draws: list = []
-        p = self.inner.picks(CommContext(ctx.env, ctx.state, ctx.obs, _TapRng(ctx.rng, draws)), round)  # type: ignore[arg-type]
+        # the same context with the random source tapped (its step too: expo's graph cycles with it)
+        p = self.inner.picks(dataclasses.replace(ctx, rng=_TapRng(ctx.rng, draws)), round)  # type: ignore[arg-type]
         self.rounds.append((None if p is None else p[0].cpu(), draws))
         return p
 
 
 @dataclass
-class _TapPolicy:
-    """The policy passed through, keeping each step's observation, masks and applied action."""
+class _TapSteps:
+    """The recorder of a golden episode: each step's observation, masks and applied action (batch 0)."""
 
-    policy: CommTransformer
-    target: object
+    target: object  # Task.target: the action as applied
     steps: list = field(default_factory=list)
 
-    def __call__(self, obs, select, picks):
-        out = self.policy(obs, select, picks)
-        act = self.target(out.action)  # type: ignore[operator]
-        self.steps.append((obs.agent[0].cpu(), obs.rel[0].cpu(), [m[0].cpu() for m in out.masks], act[0].cpu()))
-        return out
+    def __call__(self, s: Step) -> None:
+        act = self.target(s.out.action)  # type: ignore[operator]
+        self.steps.append((s.obs.agent[0].cpu(), s.obs.rel[0].cpu(), [m[0].cpu() for m in s.out.masks], act[0].cpu()))
 
 
 def _mask_picks(masks: np.ndarray) -> np.ndarray:
@@ -95,8 +95,9 @@ def record(task: Task, policy: CommTransformer, comm: CommProvider, program: Pro
     rounds = policy.n_rounds
     for k in range(episodes):
         state, gen, seed = protocol_episode(task, k)
-        tap_c, tap_p = _TapComm(comm), _TapPolicy(policy, task.target)
-        traj = rollout(task, tap_p, tap_c, state.to(device), Rng([gen], device), task.horizon)  # type: ignore[arg-type]
+        tap_c, tap_p = _TapComm(comm), _TapSteps(task.target)
+        traj = rollout(task, policy, tap_c, state.to(device), Rng([gen], device), task.horizon,
+                       record=tap_p)
         agent = torch.stack([s[0] for s in tap_p.steps]).float().numpy()
         rel = torch.stack([s[1] for s in tap_p.steps]).float().numpy()
         masks = torch.stack([torch.stack(s[2]) for s in tap_p.steps]).numpy()  # (T, R, N, N)

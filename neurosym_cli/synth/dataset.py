@@ -20,8 +20,10 @@ from ..artifacts import load_payload, non_finite, save_checkpoint
 from ..tasks.base import Task, Rng
 from ..utils.console import log
 from ..utils.io import ArtifactError
-from ..policy.comm import CommContext, FullComm
+from ..policy.comm import FullComm
 from ..policy.transformer import CommTransformer
+from ..rollout import rollout
+from ..step import Step
 
 
 @dataclass
@@ -43,6 +45,12 @@ def collect(env: Task, policy: CommTransformer, rollouts: int, stride: int, gen:
             device: torch.device, chunk: int = 50) -> list[DataBucket]:
     """Roll out the oracle ``rollouts`` times (in chunks), keeping every ``stride``-th step."""
     by_n: dict[int, list[tuple[Tensor, Tensor, Tensor]]] = {}
+
+    def keep(s: Step) -> None:
+        if s.t % stride == 0:
+            by_n.setdefault(s.state.n_agents, []).append(
+                (s.obs.agent.cpu(), s.obs.rel.cpu(), env.target(s.out.action).cpu()))
+
     policy.eval()
     rng = Rng(gen, device)
     full = FullComm()
@@ -51,15 +59,7 @@ def collect(env: Task, policy: CommTransformer, rollouts: int, stride: int, gen:
         while done < rollouts:
             batch = min(chunk, rollouts - done)
             for bucket in env.reset(batch, gen):
-                state = bucket.to(device)
-                for t in range(env.horizon):
-                    obs = env.observe(state, rng)
-                    ctx = CommContext(env, state, obs, rng, t)
-                    out = policy(obs, lambda logits, r: full.select(ctx, logits, r))
-                    if t % stride == 0:
-                        by_n.setdefault(state.n_agents, []).append(
-                            (obs.agent.cpu(), obs.rel.cpu(), env.target(out.action).cpu()))
-                    state = env.step(state, out.action)
+                rollout(env, policy, full, bucket.to(device), rng, env.horizon, stats=False, record=keep)
             done += batch
     return [DataBucket(*(torch.cat([x[k] for x in items]) for k in range(3))) for _, items in sorted(by_n.items())]
 
