@@ -25,6 +25,7 @@ from neurosym_cli.dsl.parser import parse
 from neurosym_cli.tasks import Rng, make_task
 from neurosym_cli.policy import FullComm, NearestComm, NoComm
 from neurosym_cli.policy.comm import ProgramComm
+from neurosym_cli.policy.protocol import CommWrapper
 from neurosym_cli.policy.transformer import CommTransformer
 from neurosym_cli.rollout import rollout
 from neurosym_cli.schemes import get
@@ -39,14 +40,10 @@ PROGRAMS = {  # the programs the paper-budget searches found on 2026-11-25 (docs
 }
 
 
-class Dense:
+class Dense(CommWrapper):
     """A provider seen through its mask only (picks withheld): forces the dense path."""
 
-    def __init__(self, inner):
-        self.inner, self.name = inner, inner.name
-
-    def select(self, ctx, logits, r):
-        return self.inner.select(ctx, logits, r)
+    picks_first = False
 
     def picks(self, ctx, r):
         return None

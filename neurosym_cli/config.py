@@ -60,6 +60,14 @@ class TaskConfig:
         _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
         _check(0.0 <= self.link_failure < 1.0, f"task.link_failure must lie in [0, 1), got {self.link_failure}")
 
+    @property
+    def max_agents(self) -> int:
+        """N of the largest episode the task makes, every group together: what the memory estimate
+        (policy/footprint.py) and the K < N checks read. Here agents_per_group (one group); a schema whose
+        episodes hold more agents derives it from its own fields (CrossConfig: num_groups x agents_per_group).
+        ``tasks.registry.probe`` refuses a task whose episodes outgrow it."""
+        return self.agents_per_group
+
 
 @dataclass
 class ModelConfig:
@@ -290,10 +298,10 @@ class RunConfig:
         _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
         cpus = os.cpu_count() or 1
         _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")
-        n = getattr(self.task, "max_agents", None)  # the base schema (tests, defaults) has no team size
-        task = getattr(self.task, "name", "the task")  # RunConfig() from Python: the task is not composed yet
-        _check(n is None or self.rules < n, f"rules={self.rules}: an agent of {task} has at most {n} - 1 "
-               f"others to hear (K is also the k of hard-attn and dist)")
+        if isinstance(self.task, TaskConfig):  # RunConfig() from Python holds a bare dict: no task composed yet
+            n = self.task.max_agents
+            _check(self.rules < n, f"rules={self.rules}: an agent of {self.task.name} has at most {n} - 1 "
+                   f"others to hear (K is also the k of hard-attn and dist)")
         _check(self.features in ("v1", "v2"), f"features must be v1 or v2, got {self.features!r}")
 
     def record(self) -> dict:

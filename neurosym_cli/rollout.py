@@ -73,7 +73,6 @@ def rollout(
     is done (an episode's pictures, the synthesis dataset, golden vectors)."""
     costs, records, decisions = [], [], []
     extra: dict[str, list[Tensor]] = {}
-    pop = getattr(comm, "pop_step", None)  # providers whose decisions are actions (policy/gated.py)
     for t in range(horizon):
         if detach_state:
             state = state.detach()
@@ -82,7 +81,7 @@ def rollout(
         costs.append(s.cost)
         if record is not None:
             record(s)
-        if pop is not None and (d := pop()) is not None:
+        if (d := comm.pop_step()) is not None:  # providers whose decisions are actions (policy/gated.py)
             decisions.append(d)
         if stats:
             with torch.no_grad():

@@ -25,6 +25,7 @@ import torch
 from ..dsl.ast import Program, RandomRule
 from ..episode import protocol_episode
 from ..policy.comm import CommContext, CommProvider
+from ..policy.protocol import CommWrapper
 from ..policy.transformer import CommTransformer
 from ..rollout import rollout
 from ..step import Step
@@ -48,15 +49,12 @@ class _TapRng:
         return self.inner.randn(batch, *shape)
 
 
-class _TapComm:
+class _TapComm(CommWrapper):
     """A provider passed through, keeping per round the picks it gave and its random rules' draws."""
 
     def __init__(self, inner: CommProvider):
-        self.inner, self.name = inner, inner.name
+        super().__init__(inner)
         self.rounds: list[tuple[torch.Tensor | None, list]] = []  # this step's (picks (N, K), draws)
-
-    def select(self, ctx: CommContext, logits: torch.Tensor, round: int) -> torch.Tensor:
-        return self.inner.select(ctx, logits, round)
 
     def picks(self, ctx: CommContext, round: int) -> torch.Tensor | None:
         draws: list = []

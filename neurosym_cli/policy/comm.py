@@ -3,23 +3,27 @@
 A provider answers, for each round, which agents j each agent i hears: a (B, N, N) bool mask, self excluded.
 The same transformer then attends over the selected agents only (paper section 3.3). Providers that know the
 selection before seeing any logit (no-comm, dist, prog) also give it as picks (B, N, K), so the transformer
-computes the K selected pairs only (see policy/transformer.py).
+computes the K selected pairs only (see policy/transformer.py). The protocol every provider follows, and the
+defaults of its optional members, are in policy/protocol.py.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
 
 import torch
 from torch import Tensor
 
 from ..dsl.ast import Program
-from ..dsl.interpret import picks_to_mask, program_picks
+from ..dsl.interpret import program_picks
 from ..tasks.base import Observation, Rng, Task, TaskState, eye_mask, require
 from ..tasks.features import FeatureMap
 from ..tasks.pairs import counter_uniform
+from .protocol import CommBase, CommProvider, CommWrapper, require_provider, unwrap
 from .scan import scan_program
+
+__all__ = ["CommBase", "CommContext", "CommProvider", "FullComm", "LinkFailure", "NearestComm", "NoComm",
+           "ProgramComm", "TopKComm", "TreeComm", "comm_module", "unwrap", "with_link_failure"]
 
 
 @dataclass
@@ -33,27 +37,6 @@ class CommContext:
     step: int = 0
     """the time step t of the episode (0 where there is none, e.g. a single probe); schemes that change with time
     read it (expo: ExpoComm's exponential graph cycles with t)"""
-
-
-class CommProvider(Protocol):
-    name: str
-
-    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
-        """logits: (B, N, N) the transformer's attention logits of this round -> (B, N, N) bool mask."""
-        ...
-
-    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
-        """(B, N, K) long: the same selection as agent indices (-1 = nobody), or None if it needs the logits."""
-        ...
-
-
-class _Dense:
-    """Mixin for providers that choose from the logits: no picks."""
-
-    picks_first = False
-
-    def picks(self, ctx: CommContext, round: int) -> Tensor | None:
-        return None
 
 
 def _others(logits: Tensor) -> Tensor:
@@ -71,7 +54,7 @@ def _topk_mask(score: Tensor, k: int) -> Tensor:
     return mask.scatter(-1, score.topk(k, dim=-1).indices, True)
 
 
-class FullComm(_Dense):
+class FullComm(CommBase):
     """tf-full: every agent hears every other agent (soft attention)."""
 
     name = "full"
@@ -80,7 +63,7 @@ class FullComm(_Dense):
         return _others(logits)
 
 
-class NoComm:
+class NoComm(CommBase):
     """no-comm: nobody hears anybody; each agent acts on its own state."""
 
     name = "none"
@@ -93,7 +76,7 @@ class NoComm:
         return torch.zeros(b, n, 0, dtype=torch.long, device=ctx.obs.agent.device)
 
 
-class TopKComm(_Dense):
+class TopKComm(CommBase):
     """hard-attn: each agent hears the k others with the largest attention logits (in-degree k, every round)."""
 
     name = "topk"
@@ -105,16 +88,13 @@ class TopKComm(_Dense):
         return _topk_mask(logits.masked_fill(~_others(logits), float("-inf")), self.k)
 
 
-class NearestComm:
+class NearestComm(CommBase):
     """dist: each agent hears its k nearest neighbours (noise-free distances, as the reference)."""
 
     name = "nearest"
 
     def __init__(self, k: int):
         self.k = k
-
-    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
-        return picks_to_mask(self.picks(ctx, round), ctx.state.n_agents)
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
         if ctx.obs.pairs is not None:  # a large team: a chunked scan, no (B, N, N) distances
@@ -123,7 +103,7 @@ class NearestComm:
         return d.topk(max(min(self.k, d.shape[-1] - 1), 0), dim=-1, largest=False).indices
 
 
-class ProgramComm:
+class ProgramComm(CommBase):
     """prog: a synthesized program decides whom each agent hears, one program round per communication round
     (paper sections 3.2-3.3; random rules draw from the episode's random source)."""
 
@@ -131,9 +111,6 @@ class ProgramComm:
 
     def __init__(self, program: Program, fmap: FeatureMap):
         self.program, self.fmap = program, fmap  # fmap: the task's feature map the program reads
-
-    def select(self, ctx: CommContext, logits: Tensor, round: int) -> Tensor:
-        return picks_to_mask(self.picks(ctx, round), ctx.obs.agent.shape[1])
 
     def picks(self, ctx: CommContext, round: int) -> Tensor | None:
         r = min(round, self.program.n_rounds - 1)
@@ -143,7 +120,7 @@ class ProgramComm:
         return program_picks(self.program, r, feats, ctx.rng)
 
 
-class TreeComm(_Dense):
+class TreeComm(CommBase):
     """dt: a decision tree per round decides, pair by pair, whom each agent hears (paper appendix B); no cap on
     the degrees at run time."""
 
@@ -157,15 +134,15 @@ class TreeComm(_Dense):
         return self.trees[min(round, len(self.trees) - 1)].predict(feats) & _others(logits)
 
 
-class LinkFailure:
+class LinkFailure(CommWrapper):
     """Any provider with unreliable links: each directed link fails independently with probability ``p`` at every
     step and round, and a selected message over a failed link is lost. The inner provider chooses without
     knowing which links failed (a program's rule does not pick again), so the masks, and the degrees counted
     from them, hold only the messages actually delivered (docs/fidelity.md, 'Link failure')."""
 
     def __init__(self, inner: CommProvider, p: float):
-        self.inner, self.p = inner, p
-        self.name = inner.name
+        super().__init__(inner)
+        self.p = p
 
     def _alive(self, ctx: CommContext, shape: torch.Size) -> Tensor:
         """(B, N, N) bool: link j -> i delivers this round (drawn from the bucket's random source)."""
@@ -187,26 +164,18 @@ class LinkFailure:
             alive = self._alive(ctx, ctx.obs.agent.shape).gather(-1, pk.clamp(min=0))  # (B, N, K)
         return pk.masked_fill(~alive, -1)
 
-    def __getattr__(self, name: str):  # the inner provider's program, trees, k, ...
-        return getattr(self.inner, name)
-
-
-def picks_first(comm: CommProvider) -> bool:
-    """Whether the provider names whom each agent hears before any logit (``picks``: the sparse path, O(N K) pairs
-    with gradients) rather than choosing from the (B, N, N) logits (the dense path). A provider says so with
-    ``picks_first``; one that does not is taken to pick first unless it is a dense mixin."""
-    inner = getattr(comm, "inner", comm)
-    return bool(getattr(inner, "picks_first", not isinstance(inner, _Dense)))
-
 
 def comm_module(comm: CommProvider) -> torch.nn.Module | None:
     """The provider's trainable module (rl's gate, policy/gated.py; through a link-failure wrapper), or None for a
     fixed rule."""
-    inner = getattr(comm, "inner", comm)
+    inner = unwrap(comm)
     return inner if isinstance(inner, torch.nn.Module) else None
 
 
 def with_link_failure(comm: CommProvider, p: float) -> CommProvider:
-    """``comm`` unchanged at p = 0 (no extra random draws: results stay bit-identical), else wrapped."""
+    """A scheme's provider as it runs: ``comm`` unchanged at p = 0 (no extra random draws: results stay
+    bit-identical), else wrapped; a provider that is not a ``CommBase`` is a one-line error here, not an
+    AttributeError mid-run."""
+    require_provider(comm, f"the communication provider {getattr(comm, 'name', type(comm).__name__)!r}")
     return LinkFailure(comm, p) if p > 0 else comm
 

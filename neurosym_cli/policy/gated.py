@@ -25,9 +25,10 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from ..tasks.base import eye_mask
+from .protocol import CommBase
 
 
-class GatedComm(nn.Module):
+class GatedComm(nn.Module, CommBase):
     """rl: a learned Bernoulli gate per ordered pair and round (see the module docstring). ``select`` samples the
     mask from the bucket's random source; while gradients are enabled it also records, per step, the summed
     log-probability of the decisions taken and the communication degree they cost (``pop_step``)."""
@@ -64,10 +65,7 @@ class GatedComm(nn.Module):
             self._degree.append((m.sum(2) + m.sum(1)).amax(1))  # (B,) max_i in + out, the paper's deg
         return mask
 
-    picks_first = False  # the gate needs the logits: dense path
-
-    def picks(self, ctx, round: int) -> Tensor | None:
-        return None
+    # no picks (CommBase's None): the gate needs the logits, the dense path
 
     def pop_step(self) -> tuple[Tensor, Tensor] | None:
         """The step just rolled out: ((B,) summed log-probability of every decision of every round, (B,) degree

@@ -4,8 +4,8 @@
     OwnModel   trains its own transformer under its own mask (dist, no-comm, rl, expo, comm-range)
     Retrained  the oracle fine-tuned under a synthesized artifact (prog-retrained, dt-retrained; paper section 3.5)
 
-``OwnRule`` is an ``OwnModel`` that is its own provider: a new fixed rule is one class that writes ``picks`` (the
-sparse path) or ``mask`` (the dense one), and one entry in ``schemes.SCHEMES``.
+``OwnRule`` is an ``OwnModel`` that is its own provider (a ``policy.protocol.CommBase``): a new fixed rule is one
+class that writes ``picks`` (the sparse path) or ``mask`` (the dense one), and one entry in ``schemes.SCHEMES``.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..baselines import ORACLE, BaselineConfig, Stage, train_line
 from ..errors import ConfigError
+from ..policy.protocol import CommBase
 
 if TYPE_CHECKING:
     from torch import Tensor
@@ -84,7 +85,7 @@ class OwnModel(BaselineConfig):
 
 
 @dataclass
-class OwnRule(OwnModel):
+class OwnRule(OwnModel, CommBase):
     """An ``OwnModel`` whose mask is a fixed rule of the step's context: the scheme is its own provider. Write
     ``picks`` (B, N, K) long, -1 = nobody: the transformer then computes the K picked pairs only (the sparse path,
     policy/transformer.py); or ``mask`` (B, N, N) bool, self excluded, and leave ``picks`` None (the dense path)."""
@@ -92,24 +93,12 @@ class OwnRule(OwnModel):
     def provider(self, cfg: "RunConfig", env: Any = None) -> "OwnRule":
         return self
 
-    @property
-    def picks_first(self) -> bool:
-        """A rule that writes ``picks`` runs on the sparse path (policy/comm.py ``picks_first``)."""
-        return type(self).picks is not OwnRule.picks
-
-    def picks(self, ctx: "CommContext", round: int) -> "Tensor | None":
-        return None
-
     def mask(self, ctx: "CommContext", round: int) -> "Tensor":
-        from ..dsl.interpret import picks_to_mask
-
-        pk = self.picks(ctx, round)
-        if pk is None:
-            raise NotImplementedError(f"{type(self).__name__} writes neither picks nor mask")
-        return picks_to_mask(pk, ctx.obs.agent.shape[1])
+        """(B, N, N) bool, i hears j, self excluded: the dense rule; by default the picks as a mask."""
+        return CommBase.select(self, ctx, None, round)  # type: ignore[arg-type]  (CommBase's reads no logits)
 
     def select(self, ctx: "CommContext", logits: "Tensor", round: int) -> "Tensor":
-        """The provider's dense answer (policy/comm.py ``CommProvider``): its mask, whatever the logits."""
+        """The provider's dense answer (policy/protocol.py): its mask, whatever the logits."""
         return self.mask(ctx, round)
 
 
