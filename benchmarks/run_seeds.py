@@ -42,6 +42,8 @@ from neurosym_cli.utils.cpu import PIN  # what the pinned modes set (the console
 
 ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("random-cross", "random-grid", "unlabeled-goals")
+SEEDS = (0, 1, 2)
+"""the training seeds the protocol runs per task (docs/results.md reads both from here)"""
 KEEP_SELECT = ("name", "lam", "rules", "features", "objective", "l1", "degree_term", "loss", "degree", "max_in",
                "max_out")
 
@@ -160,7 +162,7 @@ def git_commit(path: Path, message: str) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
-    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
     ap.add_argument("--budget", default="paper")
     ap.add_argument("--jobs", type=int, default=0, help="select.jobs (0 = one per CPU)")
     ap.add_argument("--runs", default=str(ROOT / "outputs"), help="runs root")

@@ -56,3 +56,42 @@ def test_unknown_placeholder_is_an_error_not_text():
         results_doc.render("x {{nope 1}}", {}, {})
     with pytest.raises(SystemExit, match="KeyError"):
         results_doc.render("{{mean random-cross tf-full cost 2}}", {}, {})
+
+
+def _spec(**over):
+    fields = dict(family="formation", name="x below y", quantity="paired", a="x", b="y", test="ci_below",
+                  threshold=0.0, paper="x has a lower loss than y", source="Figure 2", unit="loss difference x - y",
+                  long="x below y: {a:.2f} vs {b:.2f} (paired difference {d0:+.2f} ± {d1:.2f}){weak}",
+                  cell="{d0:+.2f}{ns}", weak="lower on average")
+    return results_doc.ClaimSpec(**{**fields, **over})
+
+
+def test_a_claim_record_holds_or_fails_by_its_test_and_threshold():
+    spec = _spec()
+    c = results_doc.evaluate(spec, _variant({"x": [1.0, 2.0, 3.0], "y": [2.0, 3.1, 3.9]}))
+    assert c.holds and c.value == pytest.approx(-1.0) and c.name == "x below y"
+    assert c.cell == "−1.00" and c.long.startswith("x below y: 2.00 vs 3.00 (paired difference -1.00 ± ")
+    # lower on average, but the 95 % interval of the paired difference crosses 0: fails, and says why
+    c = results_doc.evaluate(spec, _variant({"x": [1.0, 2.0, 3.0], "y": [1.5, 1.9, 3.2]}))
+    assert not c.holds and c.value == pytest.approx(-0.2)
+    assert c.long.endswith(" (lower on average, not significant)") and c.cell == "−0.20, not significant"
+    # the same numbers against a threshold on the mean alone (a `below` test) hold; a stricter threshold fails
+    assert results_doc.evaluate(_spec(test="below"), _variant({"x": [1.0, 2.0, 3.0], "y": [1.5, 1.9, 3.2]})).holds
+    gap = _spec(quantity="gap", test="abs_at_most", threshold=5.0, cell="{q:+.1f} %")
+    near, far = _variant({"x": [10.2, 10.2], "y": [10.0, 10.0]}), _variant({"x": [11.0, 11.0], "y": [10.0, 10.0]})
+    assert results_doc.evaluate(gap, near).cell == "+2.0 %" and results_doc.evaluate(gap, near).holds
+    assert not results_doc.evaluate(gap, far).holds and results_doc.evaluate(gap, far).value == pytest.approx(10.0)
+    with pytest.raises(KeyError, match="y"):  # a baseline the numbers lack is named (the seed tables say so)
+        results_doc.evaluate(spec, _variant({"x": [1.0, 2.0]}))
+    with pytest.raises(ValueError, match="test 'most'"):
+        _spec(test="most")
+
+
+def test_the_paper_claims_are_records_with_their_source():
+    from benchmarks.results.claims import load
+
+    specs = load()
+    assert len({s.name for s in specs}) == len(specs) == 10
+    assert {s.family for s in specs} == {"formation", "unlabeled-goals"}
+    assert all(s.paper and ("Figure" in s.source or "Table" in s.source) for s in specs)
+    assert next(s for s in specs if "4.13" in s.name).threshold == pytest.approx(0.9 * 4.13)
