@@ -143,6 +143,7 @@ class ExportConfig:
 
     def __post_init__(self) -> None:
         _check(self.episodes >= 1, f"export.episodes must be at least 1, got {self.episodes}")
+        check_finite(self, "export.")  # tolerance=inf would pass any action
         _check(self.tolerance > 0, f"export.tolerance must be positive, got {self.tolerance}")
 
 

@@ -4,12 +4,13 @@ vectors through each artifact in a process that cannot import neurosym."""
 
 from __future__ import annotations
 
+import hashlib
 import io
 import os
 import shutil
 from pathlib import Path
 
-from .. import paths
+from ..run import RunDir
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import log, say
 from ..utils.io import write_json, write_text
@@ -18,18 +19,31 @@ from . import RunInfo
 
 def export_dir(cfg: RunConfig) -> Path:
     """Where the export of ``cfg.baseline`` goes: export.dir, else <exp_dir>/export/<baseline label>."""
-    return Path(cfg.export.dir) if cfg.export.dir else Path(cfg.exp_dir) / "export" / paths.baseline_label(cfg)
+    return Path(cfg.export.dir) if cfg.export.dir else Path(cfg.exp_dir) / "export" / RunDir(cfg).label
 
 
 def export(cfg: RunConfig, info: RunInfo | None = None) -> dict:
     """Write the export folder (or check it, with export.check=true); returns what was written or the check's
     report."""
+    from ..export.folder import claim
+
     folder = export_dir(cfg)
     if cfg.export.check:
         return check(folder, cfg.export.tolerance)
-    if folder.exists() and not cfg.overwrite:
-        raise ConfigError(f"{folder} exists; overwrite=true replaces it (export.check=true checks it)")
-    return write_export(cfg, folder)
+    claimed = claim(folder, overwrite=cfg.overwrite)  # only an export is ever replaced
+    _need_onnx(cfg)
+    return write_export(cfg, folder, claimed)
+
+
+def _need_onnx(cfg: RunConfig) -> None:
+    """One line naming the extra when the policy's ONNX files cannot be written (torch.onnx needs onnx)."""
+    if not RunDir(cfg).model_file.exists():
+        return
+    try:
+        import onnx  # noqa: F401
+    except ImportError:
+        raise UserError('exporting the policy needs the onnx extra: pip install -e ".[onnx]" (or pip install '
+                        'onnx onnxruntime); a program file alone (program=FILE, no trained model) needs none') from None
 
 
 def check(folder: Path, tolerance: float | None = None) -> dict:
@@ -52,27 +66,30 @@ def check(folder: Path, tolerance: float | None = None) -> dict:
 
 def _program_of(comm):
     """The provider's program, when it is one (through a link-failure wrapper), else None."""
-    from ..policy.comm import ProgramComm
+    from ..policy.comm import ProgramComm, unwrap
 
-    inner = getattr(comm, "inner", comm)
+    inner = unwrap(comm)
     return inner if isinstance(inner, ProgramComm) else None
 
 
-def write_export(cfg: RunConfig, folder: Path) -> dict:
+def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
+    """Build the export in a temporary sibling of ``folder`` and publish it there (``claimed``: what
+    export.folder.claim saw at ``folder``)."""
     import numpy as np
     import torch
 
     from ..export import codegen, golden, spec
+    from ..export.folder import FORMAT, publish
     from ..export.policy import OPSET, export_policy
     from ..export.readme import readme
     from ..tasks import make_task
     from ..utils.io import atomic_write_bytes
     from ..utils.seeding import seed_everything
-    from .comm import baseline_comm, load_baseline
+    from ..run.models import baseline_comm, load_baseline
 
     seed_everything(cfg.seed)
     device = torch.device("cpu")  # golden vectors on the CPU: what a robot's runtime compares against
-    has_model = (paths.train_dir(cfg) / "model.pt").exists()
+    has_model = RunDir(cfg).model_file.exists()
     if has_model or not cfg.program:
         policy, task, comm = load_baseline(cfg, device)
     else:  # program=FILE with no trained model: the program alone
@@ -117,22 +134,21 @@ def write_export(cfg: RunConfig, folder: Path) -> dict:
             shutil.copyfile(standalone / name, tmp / name)
         files += ["check.py", "agent_runtime.py"]
         manifest = {
-            "format": "neurosym-export/1", "task": cfg.task.name, "baseline": paths.baseline_label(cfg),
+            "format": FORMAT, "task": cfg.task.name, "baseline": RunDir(cfg).label,
             "budget": cfg.budget.name, "seed": cfg.seed, "features": cfg.features, "rounds": task.rounds,
             "program": program is not None, "policy": policy is not None,
             "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
             "opset": OPSET if policy is not None else None, "tolerance": cfg.export.tolerance,
             "semantics": spec.SEMANTICS if program is not None else None,
             "files": sorted(files + ["manifest.json", "README.md"]),
-        }
+            "sha256": {f: hashlib.sha256((tmp / f).read_bytes()).hexdigest() for f in sorted(files)},
+        }  # sha256: the check refuses an artifact edited after the export, even one no golden decision notices
         write_json(tmp / "manifest.json", manifest)
         write_text(tmp / "README.md", readme(manifest, meta, program, vocab, cfg, task))
-        if folder.exists():
-            shutil.rmtree(folder)
-        tmp.rename(folder)  # the folder appears complete or not at all
+        publish(tmp, folder, claimed)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    label = paths.baseline_label(cfg)
+    label = RunDir(cfg).label
     if program is None:
         say(f"{label} has no program: exported the policy alone (whom to hear is an input; golden picks are the "
             f"agents it heard)")

@@ -2,17 +2,21 @@
 
     python check.py [FOLDER] [--tolerance 1e-5] [--report report.json]
 
-program.py (plain Python), program.h (compiled with the system's cc, where there is one), policy.onnx and
-agent/*.onnx (onnxruntime), policy.pt (torch), each on the recorded inputs: picks must agree exactly (random
-rules fed the recorded uniforms), actions within the tolerance (max absolute difference). Prints one line per
-artifact; the first mismatch is named by file, episode, step, round and agent. Exit 0: all agree; 1: a mismatch;
-2: the folder cannot be read. An artifact whose runtime is missing is skipped, with the reason.
+program.py (plain Python), program.json (read by this file as its semantics say), program.h (compiled with the
+system's cc, where there is one), policy.onnx and agent/*.onnx (onnxruntime), policy.pt (torch), each on the
+recorded inputs: picks must agree exactly (random rules fed the recorded uniforms), actions within the tolerance
+(max absolute difference, finite). Every file must also be the one exported (the manifest's sha256). Prints one
+line per artifact; the first mismatch is named by file, episode, step, round and agent. Exit 0: all agree; 1: a
+mismatch, or nothing replayed; 2: the folder cannot be read (no golden episode included). An artifact whose
+runtime is missing is skipped, with the reason.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -31,11 +35,22 @@ def where(e, t, i, r=None):
 
 
 class Golden:
+    """golden.json and golden.npz; ValueError when they hold no step to replay or disagree on the episodes (a
+    check of nothing must not pass)."""
+
     def __init__(self, folder: Path):
         self.meta = json.loads((folder / "golden.json").read_text())
         with np.load(folder / "golden.npz", allow_pickle=False) as z:  # arrays only, never pickles
             self.arrays = {k: z[k] for k in z.files}
         self.episodes = [m["episode"] for m in self.meta["episodes"]]
+        held = sorted(int(k[1:-len("_agent")]) for k in self.arrays if k.startswith("e") and k.endswith("_agent"))
+        if not self.episodes:
+            raise ValueError("golden.json lists no episode, so there is nothing to replay")
+        if sorted(self.episodes) != held:
+            raise ValueError(f"golden.json lists episodes {sorted(self.episodes)}, golden.npz holds {held}")
+        empty = [e for e in self.episodes if 0 in self.arrays[f"e{e}_agent"].shape[:2]]
+        if empty:
+            raise ValueError(f"golden.npz holds no step or no agent in episode {empty[0]}")
 
     def __getitem__(self, key):
         return self.arrays[key]
@@ -51,13 +66,20 @@ def check_program_py(folder: Path, g: Golden) -> str:
     from agent_runtime import load_program
 
     mod = load_program(folder / "program.py")
-    rules, randoms = rule_counts(mod)
+    return f"{replay_picks('program.py', mod.ROUNDS, *rule_counts(mod), g)} decisions, picks identical"
+
+
+def replay_picks(name: str, rounds, rules: list, randoms: list, g: Golden) -> int:
+    """Every recorded decision through ``rounds`` (round<r>(me, others, i, uniform) each, fed the recorded
+    uniforms): the number replayed, or a Mismatch naming the first that differs."""
+    if len(rounds) != g[f"e{g.episodes[0]}_picks"].shape[1]:
+        raise Mismatch(f"{name}: {len(rounds)} round(s), golden {g[f'e{g.episodes[0]}_picks'].shape[1]}")
     n_checked = 0
     for e in g.episodes:
         agent, rel, picks, uni = g[f"e{e}_agent"], g[f"e{e}_rel"], g[f"e{e}_picks"], g[f"e{e}_uniform"]
         for t in range(agent.shape[0]):
             n = agent.shape[1]
-            for r, fn in enumerate(mod.ROUNDS):
+            for r, fn in enumerate(rounds):
                 for i in range(n):
                     stream = [float(x) for q in range(randoms[r]) for x in uni[t, r, q, i]]
                     used = [0]
@@ -69,12 +91,101 @@ def check_program_py(folder: Path, g: Golden) -> str:
                     got = fn(agent[t, i].tolist(), rel[t, i].tolist(), i, uniform if randoms[r] else None)
                     want = picks[t, r, i, :rules[r]].tolist()
                     if got != want or list(picks[t, r, i, rules[r]:]) != [-1] * (picks.shape[-1] - rules[r]):
-                        raise Mismatch(f"program.py: {where(e, t, i, r)}: picks {got}, golden {want}")
+                        raise Mismatch(f"{name}: {where(e, t, i, r)}: picks {got}, golden {want}")
                     if used[0] != len(stream):
-                        raise Mismatch(f"program.py: {where(e, t, i, r)}: drew {used[0]} uniforms, golden "
+                        raise Mismatch(f"{name}: {where(e, t, i, r)}: drew {used[0]} uniforms, golden "
                                        f"{len(stream)}")
                     n_checked += 1
-    return f"{n_checked} decisions, picks identical"
+    if n_checked == 0:
+        raise Mismatch(f"{name}: no decision to replay")
+    return n_checked
+
+
+# ------------------------------------------------------------------------------------------- program.json
+def json_rounds(spec: dict) -> tuple[list, list, list]:
+    """program.json read as its semantics_text says, by itself (features from their sources, filters, scores):
+    (round functions like program.py's, rules per round, random rules per round). The check replays the file a
+    robot in another language implements, not only the code generated beside it."""
+    sources = {f["name"]: f["source"] for f in spec["features"]}
+
+    def feature(name, me, o):
+        src = sources[name]
+        if "product" in src:  # left to right, as program.py multiplies
+            vals = [feature(p, me, o) for p in src["product"]]
+            out = vals[0]
+            for v in vals[1:]:
+                out = out * v
+            return out
+        arr = me if src["field"] == "agent" else o
+        x, y = arr[src["start"]], arr[src["start"] + 1]
+        x, y = (-x, -y) if src["sign"] < 0 else (x, y)
+        parts = {"x": lambda: x, "y": lambda: y, "d": lambda: math.hypot(x, y), "theta": lambda: math.atan2(y, x)}
+        return parts[src["part"]]()
+
+    def linear(terms, me, o):  # sum_k w_k phi_k in the written order
+        out = None
+        for name, w in terms:
+            v = feature(name, me, o) if w == 1.0 else w * feature(name, me, o)
+            out = v if out is None else out + v
+        return 0.0 if out is None else out
+
+    def holds(c, me, o):
+        op = c["op"]
+        if op == "true":
+            return True
+        if op == "test":
+            return linear(c["lhs"], me, o) >= c["threshold"]
+        if op in ("and", "or"):
+            a, b = holds(c["left"], me, o), holds(c["right"], me, o)
+            return (a and b) if op == "and" else (a or b)
+        raise ValueError(f"unknown filter op {op!r}")
+
+    def rule_fn(rule):
+        rnd = {"random": True, "argmax": False}[rule["kind"]]
+
+        def pick(me, others, i, uniform):
+            best_j, best = -1, 0.0
+            for j, o in enumerate(others):
+                u = uniform() if rnd else None  # one draw per index j, before any test
+                if j == i:
+                    continue
+                if holds(rule["filter"], me, o):
+                    score = u if rnd else linear(rule["score"], me, o)
+                    if best_j < 0 or score > best:  # ties keep the lowest index
+                        best_j, best = j, score
+            return best_j
+        return pick
+
+    rounds = []
+    for rules in spec["rounds"]:
+        fns = [rule_fn(r) for r in rules]
+        rounds.append(lambda me, others, i, uniform, fns=fns: [f(me, others, i, uniform) for f in fns])
+    return (rounds, [len(rs) for rs in spec["rounds"]],
+            [sum(r["kind"] == "random" for r in rs) for rs in spec["rounds"]])
+
+
+def check_program_json(folder: Path, g: Golden) -> str:
+    spec = json.loads((folder / "program.json").read_text())
+    if spec.get("semantics") != SEMANTICS:
+        raise Mismatch(f"program.json: semantics {spec.get('semantics')!r}, this checker implements {SEMANTICS}")
+    return f"{replay_picks('program.json', *json_rounds(spec), g)} decisions, picks identical"
+
+
+SEMANTICS = "neurosym-rules/1"
+
+
+# ------------------------------------------------------------------------------------------- integrity
+def check_checksums(folder: Path, manifest: dict) -> str:
+    """Every file the export wrote is the one the manifest recorded (sha256): an artifact edited after the
+    export, even where no golden decision would notice, is not passed."""
+    sums = manifest.get("sha256")
+    if not isinstance(sums, dict) or not sums:
+        raise SkipCheck("the manifest records no checksums (an export written before they were)")
+    for name, want in sorted(sums.items()):
+        got = hashlib.sha256((folder / name).read_bytes()).hexdigest()
+        if got != want:
+            raise Mismatch(f"{name}: changed after the export (its sha256 is not the manifest's)")
+    return f"{len(sums)} files as exported (sha256)"
 
 
 HARNESS = r"""
@@ -238,18 +349,24 @@ def main(argv=None) -> int:
     try:
         manifest = json.loads((folder / "manifest.json").read_text())
         g = Golden(folder)
-    except (OSError, ValueError, KeyError) as e:
+        tol = args.tolerance if args.tolerance is not None else float(manifest["tolerance"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
         print(f"check: cannot read the export folder {folder}: {e}", file=sys.stderr)
         return 2
-    tol = args.tolerance if args.tolerance is not None else float(manifest["tolerance"])
-    checks = []
-    if manifest["program"]:
+    if not (math.isfinite(tol) and tol >= 0):  # an infinite tolerance passes any action: a check of nothing
+        print(f"check: the tolerance must be a finite number >= 0, got {tol}", file=sys.stderr)
+        return 2
+    present = {p.name for p in folder.iterdir()}
+    checks = []  # an artifact in the folder is checked whatever the manifest says
+    if manifest["program"] or present & {"program.json", "program.py", "program.h"}:
         checks += [("program.py", lambda: check_program_py(folder, g)),
+                   ("program.json", lambda: check_program_json(folder, g)),
                    ("program.h", lambda: check_program_h(folder, g))]
-    if manifest["policy"]:
+    if manifest["policy"] or present & {"policy.onnx", "policy.pt", "agent"}:
         checks += [("policy.onnx", lambda: check_onnx(folder, g, tol)),
                    ("policy.pt", lambda: check_torchscript(folder, g, tol)),
                    ("agent/*.onnx", lambda: check_agents(folder, g, tol))]
+    checks.append(("checksums", lambda: check_checksums(folder, manifest)))
     results, first = [], None
     for name, fn in checks:
         try:
@@ -263,6 +380,9 @@ def main(argv=None) -> int:
             msg = f"{name}: cannot be replayed: {type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
             results.append({"file": name, "status": "mismatch", "detail": msg})
             first = first or msg
+    if not any(r["status"] == "ok" for r in results if r["file"] != "checksums"):
+        first = first or ("nothing was replayed: " + ("; ".join(f"{r['file']} {r['detail']}" for r in results
+                                                               if r["status"] == "skipped") or "no artifact"))
     for r in results:
         print(f"{r['file']:<14} {r['status']:<9} {r['detail']}")
     report = {"folder": str(folder), "tolerance": tol, "neurosym_importable": neurosym_importable(),
