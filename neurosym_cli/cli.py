@@ -5,14 +5,30 @@ Imports nothing heavy, so `neurosym --help` answers in milliseconds (torch is im
 
 from __future__ import annotations
 
-import difflib
-import logging
 import os
-import re
 import sys
 
-from neurosym_cli.argv import check_launcher
-from neurosym_cli.commands import COMMANDS
+
+def drop_working_directory() -> None:
+    """Take the working directory off sys.path (`python -m` and `python -c` put it first), in this process and in
+    its workers (PYTHONSAFEPATH, Python 3.11+: joblib's workers start with `python -m`): a user's own datetime.py or
+    queue.py there would replace the standard library's in everything the command imports. Their task modules come
+    back at the end of sys.path (tasks/registry.add_import_paths); a source checkout run from its own root keeps its
+    place. Only for the console entry: a notebook importing this module keeps its path."""
+    sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != os.getcwd()
+                   or os.path.isfile(os.path.join(p or ".", "neurosym_cli", "cli.py"))]
+    os.environ.setdefault("PYTHONSAFEPATH", "1")
+
+
+if __name__ == "__main__":
+    drop_working_directory()
+
+import difflib  # noqa: E402  (after the working directory left sys.path)
+import logging  # noqa: E402
+import re  # noqa: E402
+
+from neurosym_cli.argv import check_launcher  # noqa: E402
+from neurosym_cli.commands import COMMANDS  # noqa: E402
 
 EXAMPLES = """examples:
   neurosym pipeline task=random-grid                 # the whole method and its baselines, quick budget
@@ -301,6 +317,7 @@ class QuietLauncherDump(logging.Filter):
 
 
 def main() -> None:
+    drop_working_directory()
     try:
         _main()
     except KeyboardInterrupt:  # Ctrl-C before a command's own handler is in place (while torch imports)

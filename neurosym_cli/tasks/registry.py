@@ -38,6 +38,7 @@ def import_target(target: str) -> Any:
         module, _, attr = target.rpartition(".")
     if not module or not attr:
         raise ConfigError(f"task._target_={target!r} is not an import path like package.module.Class")
+    add_import_paths([p for p in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if p])  # in a worker
     try:
         mod = importlib.import_module(module)
     except Exception as e:  # ImportError, or the user's module failing while it imports
@@ -45,8 +46,21 @@ def import_target(target: str) -> Any:
         raise ConfigError(f"task._target_={target!r}: cannot import {module!r} ({type(e).__name__}: {msg}); "
                           f"is it on the Python path (the working directory, or an installed package)?") from None
     if not hasattr(mod, attr):
-        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}")
+        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}{_shadowed(module, mod)}")
     return getattr(mod, attr)
+
+
+def _shadowed(module: str, mod: Any) -> str:
+    """'; ...' when a user's file of that name lies in an import path but Python's or a package's module of the
+    same name came first (the user's directories come last on sys.path), else ''."""
+    top = module.partition(".")[0]
+    mine = [Path(d) / f"{top}.py" for d in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if d]
+    mine = [f for f in mine if f.is_file()]
+    where = getattr(mod, "__file__", None) or "built in"
+    if mine and not any(Path(where).resolve() == f.resolve() for f in mine if where != "built in"):
+        return (f"; {module!r} is {where}, not your {mine[0]}: the standard library and installed packages come "
+                f"first, so rename your module (and _target_)")
+    return ""
 
 
 def task_class(target: str) -> type:
@@ -106,9 +120,10 @@ def make_task(cfg: TaskConfig, horizon: int | None = None) -> Any:
     return task
 
 
-def probe(task: Any, name: str) -> None:
+def probe(task: Any, name: str, *, max_agents: int | None = None) -> None:
     """Reset two episodes and observe them: wrong shapes are one line naming the method and the shapes, before any
-    training starts."""
+    training starts. ``max_agents``: the config's N of the largest episode (``TaskConfig.max_agents``), which the
+    memory and K < N checks trust; an episode with more agents is one line saying what to add."""
     import torch
 
     from .base import Rng, TaskState
@@ -125,6 +140,11 @@ def probe(task: Any, name: str) -> None:
     s = buckets[0]
     if s.pos.dim() != 3 or s.pos.shape[-1] != 2:
         raise ConfigError(f"task {name}: state.pos must be (B, N, 2), got {tuple(s.pos.shape)}")
+    most = max(b.n_agents for b in buckets)
+    if max_agents is not None and most > max_agents:
+        raise ConfigError(f"task {name}: reset() made an episode of {most} agents, but its config's max_agents is "
+                          f"{max_agents} (agents_per_group by default); give its schema a max_agents property "
+                          "returning the largest N (docs/extending.md, section 2)")
     obs = task.observe(s, Rng(gen))
     b, n = s.batch, s.n_agents
     want = {"agent": (b, n, task.obs_dim), "rel": (b, n, n, task.pair_dim)}
@@ -235,14 +255,20 @@ def import_paths(args: list[str]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
+IMPORT_PATHS_ENV = "NEUROSYM_IMPORT_PATHS"
+"""the directories of users' task modules, for every process that resolves a task (workers inherit it)"""
+
+
 def add_import_paths(paths: list[str]) -> None:
-    """Put ``paths`` on this process's sys.path and on PYTHONPATH, so workers (joblib, process pools, submitit)
-    import the user's task module the same way."""
-    for p in reversed(paths):
+    """Put ``paths`` at the END of this process's sys.path and in NEUROSYM_IMPORT_PATHS, which ``import_target``
+    reads in every worker (joblib, process pools, submitit). At the end, not the front and not on PYTHONPATH
+    (which Python puts before the standard library): a user's own datetime.py or queue.py in the working directory
+    never replaces the module of that name; their task module is found there all the same."""
+    for p in paths:
         if p not in sys.path:
-            sys.path.insert(0, p)
-    old = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
-    os.environ["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + old))
+            sys.path.append(p)
+    old = [p for p in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if p]
+    os.environ[IMPORT_PATHS_ENV] = os.pathsep.join(dict.fromkeys(old + paths))
 
 
 # ------------------------------------------------------------------ the command line's tasks and their keys
