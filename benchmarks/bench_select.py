@@ -31,7 +31,7 @@ SCHEDULES = {
 def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: int) -> dict:
     import torch
 
-    from neurosym_cli import artifacts
+    from neurosym_cli.run import checkpoints
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
     from neurosym_cli.tasks import make_task
@@ -45,11 +45,11 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     cfg = compose_config("synth", [f"task={task}"])
     sch = SCHEDULES[schedule]
     t0 = time.perf_counter()
-    payload = artifacts.load_checkpoint(Path(exp) / "train/oracle/model.pt", "neurosym train")
-    policy = artifacts.policy_from_payload(payload).eval()
+    payload = checkpoints.load_checkpoint(Path(exp) / "train/oracle/model.pt", "neurosym train")
+    policy = checkpoints.policy_from_payload(payload).eval()
     env = make_task(cfg.task)
     data_file = sorted(Path(exp, "synth").glob("dataset-*.pt"))[0]
-    data = from_payload(artifacts.load_payload(data_file, "neurosym synth", FORMAT, "dataset"))
+    data = from_payload(checkpoints.load_payload(data_file, "neurosym synth", FORMAT, "dataset"))
     cpu = torch.device("cpu")
 
     def scorer(d, g):

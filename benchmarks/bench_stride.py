@@ -20,7 +20,7 @@ import torch
 
 from pathlib import Path
 
-from neurosym_cli.artifacts import load_checkpoint, policy_from_payload
+from neurosym_cli.run.checkpoints import load_checkpoint, policy_from_payload
 from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.dsl.ast import Program
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules

@@ -117,13 +117,13 @@ def synth(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) ->
     """Synthesize the program of ``cfg`` (prog, or det-prog; dt fits a tree and returns None) on the oracle's
     dataset, or reuse the one there. Returns the program."""
     from .dsl.files import load_program
-    from . import paths
+    from .run import RunDir, synth_command
     from .stages.synth import synthesize
 
     c = _with(_selected(cfg), "synth", baseline or ("prog" if cfg.baseline.name == "tf-full" else None))
     with _quiet(verbose):
         synthesize(c, RunInfo(multirun=not verbose))
-    return load_program(paths.program_file(c), paths.synth_command(c)) if c.baseline.has_program else None
+    return load_program(RunDir(c).program_file, synth_command(c)) if c.baseline.has_program else None
 
 
 def retrain(cfg: RunConfig, baseline: str = "prog-retrained", verbose: bool = False) -> dict:

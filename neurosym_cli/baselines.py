@@ -3,7 +3,7 @@
 A baseline is the shared transformer plus a communication scheme: the weights it runs on and the provider that
 hands it a mask each round (paper section 4). Each baseline is a typed config schema, a subclass of
 ``BaselineConfig`` in ``schemes/`` registered once in ``schemes.SCHEMES``; the composed ``cfg.baseline`` *is* that
-object, so every layer asks it instead of testing names: ``paths.py`` its directories and commands, the stage
+object, so every layer asks it instead of testing names: ``run/`` its directories and commands, the stage
 graph its upstream stages, the stages its provider and artifact, the tables its label.
 """
 
@@ -120,7 +120,8 @@ class BaselineConfig:
 
     def provider(self, cfg: "RunConfig", env: Any = None) -> Any:
         """Its communication provider (policy/comm.py ``CommProvider``) for ``cfg``, artifact loaded and checked;
-        ``env``, the task, for a scheme whose rule needs it when built (none of the paper's)."""
+        ``env``, the task, for a scheme whose rule needs it when built (none of the paper's). A scheme with an
+        ``artifact(cfg)`` is also given its file as ``artifact=`` (a Path, composed by run/layout.py)."""
         raise NotImplementedError
 
     def rules(self, cfg: "RunConfig", comm: Any) -> int:

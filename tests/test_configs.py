@@ -65,13 +65,13 @@ def test_paper_budget():
 
 
 def test_hinge_programs_do_not_share_the_paper_objectives_place():
-    from neurosym_cli import paths
+    from neurosym_cli.run import RunDir, synth_command
 
     paper = typed_config(_compose("synth", ["task=random-grid", "baseline=prog"]))
     hinge = typed_config(_compose("synth", ["task=random-grid", "baseline=prog", "synth.objective=hinge"]))
-    assert paths.program_tag(paper) == "k2-lam0.5-v1" and paths.program_tag(hinge) == "k2-lam0.5-v1-hinge"
-    assert paths.synth_dir(paper) != paths.synth_dir(hinge)
-    assert "synth.objective=hinge" in paths.synth_command(hinge)
+    assert RunDir(paper).program_tag == "k2-lam0.5-v1" and RunDir(hinge).program_tag == "k2-lam0.5-v1-hinge"
+    assert RunDir(paper).synth_dir != RunDir(hinge).synth_dir
+    assert "synth.objective=hinge" in synth_command(hinge)
 
 
 def test_baseline_group_is_the_registry():

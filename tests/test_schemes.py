@@ -9,7 +9,8 @@ import pytest
 import torch
 
 from conftest import neurosym_cmd
-from neurosym_cli import paths
+from neurosym_cli.run import RunDir, synth_command, train_command
+from neurosym_cli.run.models import scheme_provider
 from neurosym_cli.baselines import VERBS, Artifact, BaselineConfig, Stage
 from neurosym_cli.commands.apps import compose_config
 from neurosym_cli.config import UserError
@@ -97,9 +98,9 @@ def test_comm_range_is_the_brute_force_radius_mask(radius):
 def test_comm_range_names_its_radius_and_refuses_a_bad_one():
     cfg = compose_config("train", ["task=random-cross", "budget=tiny", "baseline=comm-range", "baseline.radius=2"])
     assert cfg.baseline.radius == 2.0
-    assert paths.model_name(cfg) == "comm-range-r2" == paths.baseline_label(cfg)
-    assert paths.train_command(cfg).endswith("baseline=comm-range budget=tiny seed=0 baseline.radius=2")
-    assert paths.model_name(compose_config("eval", ["baseline=comm-range"])) == "comm-range-r1.5"
+    assert RunDir(cfg).model_name == "comm-range-r2" == RunDir(cfg).label
+    assert train_command(cfg).endswith("baseline=comm-range budget=tiny seed=0 baseline.radius=2")
+    assert RunDir(compose_config("eval", ["baseline=comm-range"])).model_name == "comm-range-r1.5"
     with pytest.raises(UserError, match="baseline.radius must be positive"):
         compose_config("train", ["baseline=comm-range", "baseline.radius=0"])
 
@@ -133,9 +134,9 @@ def test_every_scheme_answers_every_question(name, tmp_path):
         line = get(stage.baseline).command(stage.verb, cfg)
         assert line.startswith(f"neurosym {stage.verb} task=random-cross "), line
     assert (art is not None) == any(s.verb == "synth" for s in ups)
-    assert paths.train_command(cfg).startswith(f"neurosym {b.weights().verb} ")
+    assert train_command(cfg).startswith(f"neurosym {b.weights().verb} ")
     if art is not None:  # the same search makes the artifact of prog and of prog-retrained
-        assert paths.synth_command(cfg) == get(next(s for s in ups if s.verb == "synth").baseline).command("synth", cfg)
+        assert synth_command(cfg) == get(next(s for s in ups if s.verb == "synth").baseline).command("synth", cfg)
     # the report finds its training curves by the model directory it names
     found, retrained = model_baseline(b.model_dir(cfg))
     assert retrained == (b.weights().verb == "retrain")
@@ -147,8 +148,12 @@ def test_every_scheme_answers_every_question(name, tmp_path):
         comm = b.provider(cfg, env)
         assert callable(comm.select) and callable(comm.picks)
     else:
+        with pytest.raises(UserError):  # nothing synthesized in this empty run directory: its file, as run/ names it
+            b.provider(cfg, env, artifact=RunDir(cfg).artifact_file())
         with pytest.raises(UserError):
-            b.provider(cfg, env)  # nothing synthesized in this empty run directory
+            scheme_provider(cfg, env)  # the same, through the run directory
+        with pytest.raises(TypeError, match="artifact="):  # a scheme never guesses where its artifact lives
+            b.provider(cfg, env)
 
 
 @pytest.mark.parametrize("name", list(SCHEMES))

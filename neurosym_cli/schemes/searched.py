@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .. import paths
 from ..baselines import ORACLE, Artifact, Stage, runs_root_arg
 from ..errors import ConfigError
 from .families import OnOracle, Retrained
@@ -62,6 +61,13 @@ def search_tag(cfg: "RunConfig") -> str:
     return f"k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}" + "".join(suffix for suffix, _ in search_variants(cfg))
 
 
+def _given(artifact: Path | None, scheme: "Searched") -> Path:
+    """The file of a scheme's program or tree, as its caller passes it (run/ composes where it lives)."""
+    if artifact is None:
+        raise TypeError(f"{scheme.name} runs under a program or tree: pass its file as artifact=")
+    return Path(artifact)
+
+
 @dataclass
 class Searched(OnOracle):
     """Runs under an artifact that `neurosym synth baseline=<search()>` makes from the oracle."""
@@ -97,8 +103,9 @@ class Searched(OnOracle):
             return self._line("retrain", cfg, self.name)
         return super().command(verb, cfg)
 
-    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
-        """SHA-1 of what a model retrained under it is retrained under."""
+    def artifact_identity(self, cfg: "RunConfig", comm: Any, *, artifact: Path | None = None) -> str:
+        """SHA-1 of what a model retrained under it is retrained under; ``artifact``: the file of its program or
+        tree (run/layout.py)."""
         raise NotImplementedError
 
 
@@ -131,14 +138,14 @@ class Program(Searched):
             return self._line("retrain", cfg, self.name, " " + shlex.quote(f"program={cfg.program}"))  # spaces
         return super().command(verb, cfg)
 
-    def provider(self, cfg: "RunConfig", env: Any = None):
+    def provider(self, cfg: "RunConfig", env: Any = None, *, artifact: Path | None = None):
         from ..dsl.files import load_program
         from ..policy.comm import ProgramComm
 
         from ..tasks.programs import check_program, feature_map
 
-        path = paths.program_file(cfg)
-        program = load_program(path, None if cfg.program else paths.synth_command(cfg))
+        path = _given(artifact, self)
+        program = load_program(path, None if cfg.program else self.command("synth", cfg))
         fmap = feature_map(cfg, env)
         check_program(program, cfg, str(path), fmap)
         return ProgramComm(program, fmap)
@@ -146,7 +153,7 @@ class Program(Searched):
     def rules(self, cfg: "RunConfig", comm: Any) -> int:
         return comm.program.max_rules  # the file's K (program= is any file; a search may simplify rules away)
 
-    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
+    def artifact_identity(self, cfg: "RunConfig", comm: Any, *, artifact: Path | None = None) -> str:
         from ..dsl.printer import to_text
 
         return hashlib.sha1(to_text(comm.program).encode()).hexdigest()  # the rules, comments aside
@@ -168,19 +175,19 @@ class Tree(Searched):
     def label(self, cfg: "RunConfig") -> str:
         return f"{self.name}-k{cfg.rules}-{cfg.features}"
 
-    def provider(self, cfg: "RunConfig", env: Any = None):
+    def provider(self, cfg: "RunConfig", env: Any = None, *, artifact: Path | None = None):
         from ..errors import UserError
         from ..policy.comm import TreeComm
         from ..synth.tree import TreeModel
         from ..utils.io import ArtifactError, read_json
 
-        path = paths.tree_file(cfg)
+        path = _given(artifact, self)
         if not path.exists():
-            raise ArtifactError(f"no tree at {path}; create it with `{paths.synth_command(cfg)}`")
+            raise ArtifactError(f"no tree at {path}; create it with `{self.command('synth', cfg)}`")
         try:
             rounds = [TreeModel.from_dict(t) for t in read_json(path)["rounds"]]
         except (UserError, KeyError, TypeError, ValueError, IndexError) as e:
-            raise ArtifactError(f"corrupt tree {path} ({e}); `{paths.synth_command(cfg)} "
+            raise ArtifactError(f"corrupt tree {path} ({e}); `{self.command('synth', cfg)} "
                                 f"overwrite=true` fits it again") from None
         if len(rounds) != cfg.task.rounds:
             raise ConfigError(f"the tree file has {len(rounds)} round(s), the task {cfg.task.rounds}")
@@ -188,8 +195,8 @@ class Tree(Searched):
 
         return TreeComm(rounds, feature_map(cfg, env))
 
-    def artifact_identity(self, cfg: "RunConfig", comm: Any) -> str:
-        return hashlib.sha1(paths.tree_file(cfg).read_bytes()).hexdigest()
+    def artifact_identity(self, cfg: "RunConfig", comm: Any, *, artifact: Path | None = None) -> str:
+        return hashlib.sha1(_given(artifact, self).read_bytes()).hexdigest()  # the file it was read from
 
 
 @dataclass

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 
-from .. import __version__, paths
+from .. import __version__
 from ..config import RunConfig
 from ..evaluation import evaluate, summarize
 from ..utils.console import log
@@ -16,7 +16,8 @@ from ..utils.io import ArtifactError, csv_bytes, json_bytes, write_together
 from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
-from .comm import load_baseline
+from ..run import RunDir, train_command
+from ..run.models import load_baseline
 
 
 def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -> dict:
@@ -32,12 +33,12 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
     bad = next((f"{k} of seed {r['seed']}" for r in rows for k, v in r.items()
                 if isinstance(v, float) and not math.isfinite(v)), None)
     if bad:  # finite weights whose rollouts overflow: a nan is never a result, nor written over one
-        raise ArtifactError(f"evaluating {label or paths.baseline_label(cfg)} gave a non-finite {bad}; nothing "
-                            f"written: the model's rollouts diverge, `{paths.train_command(cfg)} overwrite=true` "
+        raise ArtifactError(f"evaluating {label or RunDir(cfg).label} gave a non-finite {bad}; nothing "
+                            f"written: the model's rollouts diverge, `{train_command(cfg)} overwrite=true` "
                             "trains it again (a smaller optim.lr, or smaller task scales: task.dt, task.v_max)")
     summary = summarize(rows)
-    out = paths.eval_dir(cfg) if label is None else paths.eval_dir(cfg).parent / label
-    label = label or paths.baseline_label(cfg)
+    out = RunDir(cfg).eval_dir(label)
+    label = label or RunDir(cfg).label
     with run_lock(out):
         _write(cfg, info, out, label, rows, summary, seconds, cfg.baseline.rules(cfg, comm))
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
@@ -49,6 +50,6 @@ def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], sum
     write_together({out / "metrics.csv": csv_bytes(rows), out / "metrics.json": json_bytes({
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
-        "model": str(paths.train_dir(cfg) / "model.pt"), "seconds": seconds, "version": __version__,
+        "model": str(RunDir(cfg).model_file), "seconds": seconds, "version": __version__,
         "runtime": runtime(), "config": cfg.record(),
     })})  # both or neither: a full disk never pairs a new table with an old record

@@ -9,10 +9,10 @@ import dataclasses
 import time
 from pathlib import Path
 
-from .. import paths
 from ..baselines import ORACLE
 from ..schemes import with_run
 from ..config import RunConfig
+from ..run import RunDir, pipeline_command
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
@@ -54,7 +54,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     results = {}
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = Path(cfg.exp_dir) / "pipeline_timings.json"
-    timings = read_json(timing_file, paths.pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
+    timings = read_json(timing_file, pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
     for k, stage in enumerate(stages, start=1):
@@ -67,7 +67,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         results[f"{stage.verb}:{stage.baseline}"] = RUNNERS[stage.verb](stage_cfg, stage_info)
         took = time.perf_counter() - start
         if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
-            took = max(took, _trained_seconds(paths.train_dir(stage_cfg) / "history.csv"))
+            took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
         # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
         timings[stage.name] = round(took if stage.verb == "eval" else max(took, timings.get(stage.name, 0.0)), 1)
         write_json(timing_file, timings)

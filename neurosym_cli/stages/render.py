@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 
-from .. import paths
 from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
@@ -16,7 +15,8 @@ from ..utils.io import ArtifactError
 from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
 from . import RunInfo
-from .comm import baseline_comm, load_baseline
+from ..run import RunDir
+from ..run.models import baseline_comm, load_baseline
 
 
 def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, str]:
@@ -31,7 +31,7 @@ def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, s
     except ValueError as e:
         raise ConfigError(str(e)) from None
     rec = record_episode(env, policy, comm, state, gen, device)
-    title = (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): {paths.baseline_label(cfg)}, "
+    title = (f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): {RunDir(cfg).label}, "
              f"episode {k} (eval seed {eval_seed}), N = {rec.n_agents}")
     return rec, title
 
@@ -52,7 +52,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
         raise ConfigError(f"no agent of episode {cfg.episode} enters render.window={window}; its agents move in x in "
                           f"[{lo[0]:.1f}, {hi[0]:.1f}], y in [{lo[1]:.1f}, {hi[1]:.1f}]: choose a window there, or "
                           f"render.window=null for the whole episode")
-    out = paths.render_dir(cfg)
+    out = RunDir(cfg).render_dir
     stem = f"episode{cfg.episode}" + ("" if window is None else "-window" + "_".join(f"{v:g}" for v in window))
     style = edge_style(rec, cfg.baseline)
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
@@ -85,7 +85,7 @@ def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, 
         except UserError as e:
             log.info("figures: no %s here, drawn without it (%s)", name, e)
             continue
-        out.append((paths.baseline_label(b), rec))
+        out.append((RunDir(b).label, rec))
     return out
 
 
@@ -108,12 +108,12 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     (two-groups-cross), rule regions of the program (render.agent=), Figure 5 (unlabeled-goals)."""
     from ..viz import figures as fig
 
-    out = paths.figures_dir(cfg)
+    out = RunDir(cfg).figures_dir
     head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
     made: dict[str, str] = {}
     step = cfg.render.step
     task = make_task(cfg.task, cfg.horizon)
-    tag = paths.program_tag(_with_baseline(cfg, "prog"))  # the pictures of programs name the program they show
+    tag = RunDir(_with_baseline(cfg, "prog")).program_tag  # the pictures of programs name the program they show
     recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
     if recs:
         made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-{tag}-episode{cfg.episode}.png",

@@ -6,11 +6,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .. import paths, schemes
+from .. import schemes
 from ..config import RunConfig
 from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
+from ..run import pipeline_command
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -129,13 +130,13 @@ def write_figure(cfg: RunConfig) -> Path:
     its models beside it, curves.png)."""
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
                  "training curves", Path(cfg.exp_dir) / "eval" / "curves.png")
-    return figure2(collect(Path(cfg.exp_dir), paths.pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
+    return figure2(collect(Path(cfg.exp_dir), pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
                    Path(cfg.exp_dir) / "eval" / "figure2.png", err="ci95")
 
 
 def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
-    rows = collect(Path(cfg.exp_dir), paths.pipeline_command(cfg))
+    rows = collect(Path(cfg.exp_dir), pipeline_command(cfg))
     console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95", caption=LEGEND))
     if cfg.plots:
         png = write_figure(cfg)

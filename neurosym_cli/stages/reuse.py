@@ -3,11 +3,10 @@ the one line that names the command selecting among them (select never swaps the
 
 from __future__ import annotations
 
-from pathlib import Path
 
-from .. import paths
 from ..baselines import run_args
 from ..config import RunConfig, UserError
+from ..run import RunDir
 from ..utils.io import read_json
 
 SEARCH_KEYS = ("objective", "own_scores", "simplify", "coarse", "patience")
@@ -23,10 +22,10 @@ def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
 
     found: dict[str, list[str]] = {}
     for p in points:
-        if (paths.synth_dir(p) / "program.txt").exists():
+        if RunDir(p).synthesized_file.exists():
             continue
         stem = f"k{p.rules}-lam{p.lam:g}-{p.features}"
-        for d in sorted((Path(cfg.exp_dir) / "synth").glob(f"{stem}*/summary.json")):
+        for d in RunDir(cfg).summaries(stem):
             if d.parent.name != stem and not d.parent.name.startswith(stem + "-"):
                 continue  # k1-lam0.5-v1 is not k1-lam0.5-v10
             try:

@@ -19,10 +19,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .. import __version__, paths
+from .. import __version__
 from ..baselines import run_args
 from ..schemes import get
 from ..config import RunConfig
+from ..run import RunDir
 from ..degrees import LEGEND
 from ..stats import mean_ci
 from ..utils.console import clock, say
@@ -45,9 +46,9 @@ def rl_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
 
     cfg, info = quiet_job(cfg, info)
     train(cfg, info)
-    manifest = read_json(paths.train_dir(cfg) / "manifest.json")
+    manifest = read_json(RunDir(cfg).manifest_file)
     v = validate(dataclasses.replace(cfg, cmd="eval"))
-    return {"name": paths.model_name(cfg), "cost": cfg.rl.cost, "shaped": cfg.rl.shaped, "init": cfg.rl.init,
+    return {"name": RunDir(cfg).model_name, "cost": cfg.rl.cost, "shaped": cfg.rl.shaped, "init": cfg.rl.init,
             "loss": v["loss"], "degree": v["degree"], "degree_per_seed": v["degree_per_seed"],
             "max_in": v["max_in"], "max_out": v["max_out"], "train_loss": manifest.get("final_loss"),
             "rollouts": manifest.get("rollouts"), "train_seconds": manifest.get("seconds_this_run"),
@@ -69,21 +70,21 @@ def picks_file(cfg: RunConfig) -> Path:
 
 def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """The whole comparison (module docstring); returns the picks and their test losses and degrees."""
-    from .. import artifacts
+    from ..run.checkpoints import open_checkpoint
     from .evaluate import evaluate_baseline
 
     points = grid(cfg)
     if "oracle" in cfg.rl.grid_init:  # fail early, naming the command that makes it
-        artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+        open_checkpoint(cfg, oracle=True)
     jobs = cfg.rl.jobs or (os.cpu_count() or 1)
     t0 = time.perf_counter()
     say(f"rl {cfg.task.name}: {len(points)} settings (cost {cfg.rl.grid_cost}, reward to go "
         f"{cfg.rl.grid_shaped}, init {cfg.rl.grid_init}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
-    rows = run_jobs(rl_job, points, info, jobs, "rl setting", name=paths.model_name)
+    rows = run_jobs(rl_job, points, info, jobs, "rl setting", name=lambda p: RunDir(p).model_name)
     for r in rows:
         r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
     rl1, rl2 = pick(rows)
-    by_name = {paths.model_name(p): p for p in points}
+    by_name = {RunDir(p).model_name: p for p in points}
     record = {"command": "rl", "version": __version__, "task": cfg.task.name, "seed": cfg.seed,
               "budget": cfg.budget.name, "val_seeds": cfg.budget.val_seeds,
               "rl1": {"name": rl1["name"], **dataclasses.asdict(by_name[rl1["name"]].rl)},

@@ -24,11 +24,12 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from .. import __version__, paths
+from .. import __version__
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
 from ..degrees import LEGEND
 from ..baselines import run_args
+from ..run import RunDir
 from .reuse import SEARCH_KEYS, searched_otherwise
 from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
@@ -83,11 +84,11 @@ def grid(cfg: RunConfig) -> list[RunConfig]:
 
 def point_name(cfg: RunConfig) -> str:
     """A grid point's program tag (k5-lam0.5-v1 plus the search variant)."""
-    return paths.program_tag(cfg)
+    return RunDir(cfg).program_tag
 
 
 def _val_file(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "select" / "val" / f"{paths.baseline_label(cfg)}.json"
+    return Path(cfg.exp_dir) / "select" / "val" / f"{RunDir(cfg).label}.json"
 
 
 def validate(cfg: RunConfig) -> dict[str, Any]:
@@ -98,10 +99,10 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     from ..evaluation import evaluate
     from ..utils.device import resolve_device
     from ..utils.seeding import seed_everything
-    from .comm import load_baseline
+    from ..run.models import load_baseline
 
-    program = paths.program_file(cfg).read_text() if cfg.baseline.has_program else None
-    model = paths.train_dir(cfg) / "model.pt"
+    program = RunDir(cfg).program_file.read_text() if cfg.baseline.has_program else None
+    model = RunDir(cfg).model_file
     stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
              "val_seeds": cfg.budget.val_seeds}
     out = _val_file(cfg)
@@ -119,7 +120,7 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     with torch.no_grad():
         rows = evaluate(env, policy, comm, list(range(cfg.budget.val_seeds)), device, cfg.task.detach_state,
                         split="val")
-    result = {**stamp, "label": paths.baseline_label(cfg), "seconds": time.perf_counter() - t0,
+    result = {**stamp, "label": RunDir(cfg).label, "seconds": time.perf_counter() - t0,
               "loss": [r["cost"] for r in rows], "degree_per_seed": [r[DEGREE] for r in rows],
               "max_in": sum(r["max_in"] for r in rows) / len(rows),
               "max_out": sum(r["max_out"] for r in rows) / len(rows),
@@ -252,11 +253,11 @@ def _jobs(cfg: RunConfig) -> int:
 
 def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """The whole selection (module docstring); returns the choice and its test metrics."""
-    from .. import artifacts
+    from ..run.checkpoints import open_checkpoint
     from .evaluate import evaluate_baseline
 
     points = grid(cfg)  # a bad grid is reported before a missing artifact
-    artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))  # fail early
+    open_checkpoint(cfg, oracle=True)  # fail early
     jobs = _jobs(cfg)
     t0 = time.perf_counter()
     say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
@@ -264,7 +265,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     other = searched_otherwise(cfg, points)
     if other:
         log.warning(other)
-    if jobs > 1 and not paths.dataset_file(points[0]).exists():
+    if jobs > 1 and not RunDir(points[0]).dataset_file.exists():
         from .synth import collect_dataset
 
         collect_dataset(points[0])  # one D for the whole grid, collected here once (parallel jobs would each do it)
@@ -284,7 +285,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
               "budget": cfg.budget.name, "name": pick["name"], "rules": chosen.rules, "lam": chosen.lam,
               "features": chosen.features,
               "synth": {k: getattr(chosen.synth, k) for k in SEARCH_KEYS},
-              "program": str(paths.program_file(chosen)), "val_seeds": cfg.budget.val_seeds,
+              "program": str(RunDir(chosen).program_file), "val_seeds": cfg.budget.val_seeds,
               "rule": "lowest mean validation loss; among programs whose paired 95% interval of the loss "
                       "difference to it contains 0, the lowest max in+out"}
     write_json(selected_file(cfg), record)  # the choice is fixed before any test episode is played

@@ -10,8 +10,9 @@ from pathlib import Path
 from rich.panel import Panel
 from rich.table import Table
 
-from .. import paths
 from ..config import ConfigError, RunConfig
+from ..run import RunDir, synth_command
+from ..run.layout import SUMMARY
 from ..degrees import objective_legend, objective_term
 from ..dsl.ast import Program, rule_features
 from ..dsl.vocabulary import FeatureSet
@@ -116,14 +117,14 @@ def show_program(cfg: RunConfig) -> dict:
     if not cfg.program and not cfg.baseline.has_program:
         raise ConfigError(f"baseline {cfg.baseline.name} runs under no program; show-program reads those of "
                           "baseline=prog, det-prog and their retrainings, or program=PATH")
-    path = paths.program_file(cfg)
-    program = load_program(path, None if cfg.program else paths.synth_command(cfg))
+    path = RunDir(cfg).program_file
+    program = load_program(path, None if cfg.program else synth_command(cfg))
     from ..tasks.programs import check_program, feature_map
 
     fmap = feature_map(cfg)
     check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist
     rounds, lam, objective = None, None, cfg.synth.objective
-    summary = path.parent / "summary.json"
+    summary = path.parent / SUMMARY  # beside the program: a hand-written one has none
     if summary.is_file():
         try:
             meta = json.loads(summary.read_text())

@@ -9,10 +9,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .. import paths
 from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
+from ..run import RunDir
 from ..policy.footprint import DoesNotFit
 from ..degrees import LEGEND
 from ..utils.console import clock, log, say
@@ -38,7 +38,7 @@ def stress_point(cfg: RunConfig, agents: int, failure: float) -> dict[str, Any]:
     from ..evaluation import evaluate, summarize
     from ..utils.device import resolve_device
     from ..utils.seeding import seed_everything
-    from .comm import load_baseline
+    from ..run.models import load_baseline
 
     from ..tasks import make_task, require
 
@@ -70,7 +70,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     stops: dict[str, dict[str, Any]] = {}  # label -> the smallest team that does not fit, and why
     for name in cfg.stress.baselines:
         b = dataclasses.replace(cfg, baseline=with_run(cfg, name), cmd="eval")
-        label = paths.baseline_label(b)
+        label = RunDir(b).label
         done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:
             n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents  # type: ignore[attr-defined]

@@ -7,12 +7,14 @@ from __future__ import annotations
 from pathlib import Path
 import torch
 
-from .. import __version__, artifacts, paths
+from .. import __version__
 from ..config import ConfigError, RunConfig, UserError
 from ..degrees import objective_term
 from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
+from ..run import RunDir, synth_command, train_command
+from ..run.checkpoints import open_checkpoint, policy_from_payload
 from ..tasks import make_task
 from ..synth.dataset import DataBucket, load_or_collect, subsample
 from ..synth.objective import CachedScorer
@@ -44,15 +46,17 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.program:
         raise ConfigError("synth writes its program into the run directory; program= is for eval, retrain and "
                           "show-program")
-    out = paths.synth_dir(cfg)
-    result = out / artifact.file
-    if result.exists() and (out / "summary.json").exists() and not cfg.overwrite:
-        cfg.baseline.provider(cfg)  # a corrupt result is an error, never "already done"
+    rd = RunDir(cfg)
+    result = rd.artifact_file()
+    if result.exists() and rd.summary_file.exists() and not cfg.overwrite:
+        from ..run.models import scheme_provider
+
+        scheme_provider(cfg)  # a corrupt result is an error, never "already done"
         log.info("already synthesized: %s (overwrite=true searches again)", result)
-        return {"program": str(result), **_terms(out / "summary.json")}
-    with run_lock(out):
+        return {"program": str(result), **_terms(rd.summary_file)}
+    with run_lock(rd.synth_dir):
         policy, env, data, device = collect_dataset(cfg)
-        return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device, out)
+        return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device)
 
 
 def _program_summary(rec: object) -> bool:
@@ -66,7 +70,7 @@ def _program_summary(rec: object) -> bool:
 def read_summary(cfg: RunConfig) -> dict:
     """summary.json of ``cfg``'s program search, of the shape ``search_program`` writes; else one line naming the
     command that searches it again."""
-    return read_json(paths.synth_dir(cfg) / "summary.json", f"{paths.synth_command(cfg)} overwrite=true",
+    return read_json(RunDir(cfg).summary_file, f"{synth_command(cfg)} overwrite=true",
                      _program_summary)
 
 
@@ -83,22 +87,22 @@ def collect_dataset(cfg: RunConfig):
     """(oracle policy, env, the dataset D, device) of ``cfg``: D is collected once per oracle and then reused."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
-    payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
-    policy = artifacts.policy_from_payload(payload).to(device).eval()
+    policy = policy_from_payload(open_checkpoint(cfg, oracle=True)).to(device).eval()
     env = make_task(cfg.task, cfg.horizon)
-    data = load_or_collect(paths.dataset_file(cfg), paths.synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
+    data = load_or_collect(RunDir(cfg).dataset_file, synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
                            cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device,
-                           paths.train_command(cfg, oracle=True))
+                           train_command(cfg, oracle=True))
     return policy, env, data, device
 
 
-def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
-                   out: Path) -> dict:
-    spec = RoundSpec(cfg.budget.mcmc_steps, cfg.synth.restarts, cfg.synth.final_fraction, cfg.synth.temperature,
-                     cfg.rules, cfg.synth.max_depth, cfg.baseline.det, cfg.synth.own_scores, cfg.synth.patience)
+def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device) -> dict:
+    spec = RoundSpec(steps=cfg.budget.mcmc_steps, restarts=cfg.synth.restarts, final_fraction=cfg.synth.final_fraction,
+                     temperature=cfg.synth.temperature, rules=cfg.rules, max_depth=cfg.synth.max_depth,
+                     det=cfg.baseline.det, own_scores=cfg.synth.own_scores, patience=cfg.synth.patience)
     results, trace, rounds = [], [], []
     rich = use_rich(cfg.progress, info.multirun)
-    tag = paths.program_tag(cfg)
+    rd = RunDir(cfg)
+    tag = rd.program_tag
     for r in range(cfg.task.rounds):
         # appendix A: each round's program is searched alone, the other rounds keep soft attention
         scorer = CachedScorer(policy, env, data, r, cfg.features, cfg.lam, cfg.synth.objective,
@@ -112,7 +116,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
         with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp, \
-                open_tracker(cfg.logger, paths.tensorboard_dir(cfg, run)) as tracker:
+                open_tracker(cfg.logger, rd.tensorboard_dir(run)) as tracker:
             def on_step(step: int, result, row: dict) -> None:
                 disp.update(step, result, row)
                 tracker.log(step, {f"search/{k}": row[k] for k in SEARCH_SCALARS})
@@ -145,19 +149,19 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
     header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x "
                f"{objective_term(cfg.synth.objective)} {x['degree']:.4f}" for x in rounds]
-    save_program(out / "program.txt", to_text(program), header)
-    write_csv(out / "trace.csv", trace)
-    write_json(out / "summary.json", {
+    save_program(rd.program_file, to_text(program), header)
+    write_csv(rd.trace_file, trace)
+    write_json(rd.summary_file, {
         "command": "synth", "version": __version__, "task": cfg.task.name, "tag": tag,
         "rules": cfg.rules, "lam": cfg.lam, "features": cfg.features, "det": cfg.baseline.det,
-        "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(paths.dataset_file(cfg)),
+        "objective": cfg.synth.objective, "steps": spec.steps, "dataset": str(rd.dataset_file),
         "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
         "runtime": runtime(), "config": cfg.record(),
     })
-    say(f"[green]synthesized[/] {out / 'program.txt'}")
+    say(f"[green]synthesized[/] {rd.program_file}")
     if not info.multirun:
         render(program, env.features(cfg.features).vocab, rounds, cfg.lam)
-    return {"program": str(out / "program.txt"), "objective": sum(x["objective"] for x in rounds),
+    return {"program": str(rd.program_file), "objective": sum(x["objective"] for x in rounds),
             "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
 
 
@@ -171,8 +175,7 @@ def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
     return {by: [row(*x) for x in res.hall.front(by)] for by in ("complexity", "degree")}
 
 
-def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device,
-              out: Path) -> dict:
+def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device) -> dict:
     """dt (appendix B): per round, label every pair of D by the greedy global hard attention with in- and
     out-degree <= K from the oracle's soft attention, then fit a tree on the pair features."""
     from ..synth.tree import fit_tree, greedy_hard_attention, soft_attention
@@ -198,12 +201,14 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket]
                        **fit_info, "nodes": len(tree.left)})
         log.info("dt round %d: depth %d, validation accuracy %.3f, %d nodes", r + 1, fit_info["depth"],
                  fit_info["validation_accuracy"][fit_info["depth"]], len(tree.left))
-    write_json(out / "tree.json", {"rounds": [t.to_dict() for t in trees]})
-    write_json(out / "summary.json", {"command": "synth", "version": __version__, "task": cfg.task.name,
-                                      "tag": paths.program_tag(cfg), "rules": cfg.rules, "rounds": rounds,
-                                      "runtime": runtime(), "config": cfg.record()})
-    say(f"[green]fitted[/] {out / 'tree.json'}")
-    return {"tree": str(out / "tree.json")}
+    rd = RunDir(cfg)
+    tree_file = rd.artifact_file()
+    write_json(tree_file, {"rounds": [t.to_dict() for t in trees]})
+    write_json(rd.summary_file, {"command": "synth", "version": __version__, "task": cfg.task.name,
+                                 "tag": rd.program_tag, "rules": cfg.rules, "rounds": rounds,
+                                 "runtime": runtime(), "config": cfg.record()})
+    say(f"[green]fitted[/] {tree_file}")
+    return {"tree": str(tree_file)}
 
 
 SYNTHESIZERS = {"program.txt": search_program, "tree.json": fit_trees}

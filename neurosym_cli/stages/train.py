@@ -11,13 +11,16 @@ from typing import Callable
 
 import torch
 
-from .. import __version__, artifacts, paths
+from .. import __version__
 from ..config import ConfigError, RunConfig
-from ..utils.io import ArtifactError, csv_bytes, write_together
+from ..utils.io import ArtifactError, csv_bytes, write_json, write_together
 from ..schemes import with_run
 from ..tasks import make_task, probe
 from ..policy import CommTransformer
-from ..policy.comm import CommProvider, comm_module, with_link_failure
+from ..policy.comm import CommProvider, comm_module
+from ..run import RunDir, train_command
+from ..run.checkpoints import checkpoint_bytes, load_checkpoint, open_checkpoint, policy_from_payload, policy_payload
+from ..run.models import baseline_comm, check_memory, comm_identity, load_gate
 from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.cpu import runtime
@@ -26,7 +29,6 @@ from ..utils.lock import run_lock
 from ..utils.tracking import Tracker, open_tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
-from .comm import baseline_comm, check_memory, comm_identity, load_gate
 
 class Tracked:
     """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
@@ -63,7 +65,7 @@ def _kept(ckpt) -> str:
     if not ckpt.exists():
         return "nothing was saved"
     try:
-        payload = artifacts.load_checkpoint(ckpt, "")
+        payload = load_checkpoint(ckpt, "")
         step, done = payload["fit"]["step"], payload["done"]
     except Exception:  # the message is about the divergence; an unreadable old file only loses the step number
         return f"{ckpt} is kept as it was"
@@ -75,8 +77,9 @@ def _manifest(cfg: RunConfig, info: RunInfo, out, verb: str, spec: FitSpec, stat
     """manifest.json of a finished training; returns (the last steps' history, their mean loss)."""
     last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
     final = sum(h["loss"] for h in last) / len(last)
-    artifacts.write_json(out / "manifest.json", {
-        "command": verb, "version": __version__, "checkpoint": str(out / "model.pt"), "steps": state.step,
+    run = RunDir(cfg)
+    write_json(run.manifest_file, {
+        "command": verb, "version": __version__, "checkpoint": str(run.model_file), "steps": state.step,
         "rollouts": min(state.step * spec.batch, spec.rollouts), "final_loss": final,
         "final_loss_steps": len(last),
         "seconds_this_run": seconds, "rollouts_per_second": rollouts / max(seconds, 1e-9),
@@ -99,11 +102,11 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
     env = make_task(cfg.task, cfg.horizon)
     probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
     seed_everything(cfg.seed)  # a provider's own parameters (rl's gate) are drawn now: from the seed, too
-    comm = with_link_failure(maker.provider(cfg, env), cfg.task.link_failure)
+    comm = baseline_comm(cfg, env, scheme=maker)
     if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
-        payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+        payload = open_checkpoint(cfg, oracle=True)
         return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
-                         lambda: artifacts.policy_from_payload(payload), "train", lr=cfg.optim.retrain_lr)
+                         lambda: policy_from_payload(payload), "train", lr=cfg.optim.retrain_lr)
     return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
                      lambda: CommTransformer.for_task(env, cfg.model), "train")
 
@@ -117,9 +120,9 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     env = make_task(cfg.task, cfg.horizon)
     seed_everything(cfg.seed)  # as in train: whatever the provider draws comes from the seed
     comm = baseline_comm(cfg, env)
-    payload = artifacts.load_checkpoint(paths.oracle_checkpoint(cfg), paths.train_command(cfg, oracle=True))
+    payload = open_checkpoint(cfg, oracle=True)
     return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
-                     lambda: artifacts.policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
+                     lambda: policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
                      made_under=comm_identity(cfg, comm))
 
 
@@ -136,32 +139,33 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
     spec = FitSpec(rollouts=rollouts, batch=cfg.budget.batch_rollouts, horizon=cfg.horizon, optim=cfg.optim, lr=lr,
                    detach_state=cfg.task.detach_state, checkpoint_every=cfg.budget.checkpoint_every,
                    comm_cost=cfg.rl.cost, shaped=cfg.rl.shaped, comm_lr_scale=cfg.rl.lr_scale)
-    out = paths.train_dir(cfg)
+    out = RunDir(cfg).train_dir
     with run_lock(out):
         return _train_locked(cfg, info, env, comm, init, verb, spec, device, out, made_under)
 
 
 def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: Callable[[], CommTransformer],
                   verb: str, spec: FitSpec, device: torch.device, out, made_under: str | None = None) -> dict:
-    ckpt = out / "model.pt"
+    run = RunDir(cfg)
+    ckpt = run.model_file
     state = None
     if ckpt.exists() and not cfg.overwrite:
-        payload = artifacts.load_checkpoint(ckpt, paths.train_command(cfg))
+        payload = load_checkpoint(ckpt, train_command(cfg))
         check_compatible(payload["config"], cfg, ckpt)
         if made_under and payload.get("made_under", made_under) != made_under:
             raise ConfigError(f"{ckpt} was retrained under another program (or tree) than the one there now; "
                               "overwrite=true retrains it under this one")
-        policy = artifacts.policy_from_payload(payload)
-        load_gate(comm, payload, ckpt, paths.train_command(cfg))
+        policy = policy_from_payload(payload)
+        load_gate(comm, payload, ckpt, train_command(cfg))
         try:
             state = FitState(**payload["fit"])
         except TypeError:
-            raise ArtifactError(f"{ckpt} has a resume state of another shape; `{paths.train_command(cfg)} "
+            raise ArtifactError(f"{ckpt} has a resume state of another shape; `{train_command(cfg)} "
                                 "overwrite=true` trains from the start") from None
         if state.step >= spec.steps:
             log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt,
                      state.step)
-            if not (out / "manifest.json").exists():  # the run ended before its manifest (a full disk): made now
+            if not run.manifest_file.exists():  # the run ended before its manifest (a full disk): made now
                 _manifest(cfg, info, out, verb, spec, state, 0.0, 0, device)
             return {"checkpoint": str(ckpt), "steps": state.step}
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
@@ -175,26 +179,26 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
 
     def save(st: FitState) -> None:
         fit_dict = dataclasses.asdict(st)  # every field a resume needs (training.FitState)
-        payload = artifacts.policy_payload(policy, cfg.model, cfg.record(), fit_dict, done=st.step >= spec.steps)
+        payload = policy_payload(policy, cfg.model, cfg.record(), fit_dict, done=st.step >= spec.steps)
         if made_under:
             payload["made_under"] = made_under
         if gate is not None:
             payload["comm_state"] = gate.state_dict()
-        write_together({ckpt: artifacts.checkpoint_bytes(payload), out / "history.csv": csv_bytes(st.history)})
+        write_together({ckpt: checkpoint_bytes(payload), run.history_file: csv_bytes(st.history)})
 
-    label = f"{verb} {cfg.task.name} {paths.model_name(cfg)} seed{cfg.seed}"
+    label = f"{verb} {cfg.task.name} {run.model_name} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
              spec.horizon, device, out)
     t0 = time.perf_counter()
     steps_before = state.step if state else 0
-    tb = paths.tensorboard_dir(cfg, f"{verb}-{paths.model_name(cfg)}")
+    tb = run.tensorboard_dir(f"{verb}-{run.model_name}")
     with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep, \
             open_tracker(cfg.logger, tb, steps_before) as tracker:
         try:
             state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
                         save, state)
         except ResumeMismatch as e:
-            raise ArtifactError(f"{ckpt}: {e}; `{paths.train_command(cfg)} overwrite=true` trains from the "
+            raise ArtifactError(f"{ckpt}: {e}; `{train_command(cfg)} overwrite=true` trains from the "
                                 "start") from None
         except Diverged as e:
             raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "

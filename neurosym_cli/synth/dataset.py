@@ -16,7 +16,7 @@ from pathlib import Path
 import torch
 from torch import Tensor
 
-from ..artifacts import load_payload, non_finite, save_checkpoint
+from ..run.checkpoints import load_payload, non_finite, save_checkpoint
 from ..tasks.base import Task, Rng
 from ..utils.console import log
 from ..utils.io import ArtifactError

@@ -1,0 +1,132 @@
+"""Policy checkpoints: a self-describing format (weights, architecture, config, resume state), written atomically and
+loaded safely (``weights_only=True``: tensors and plain data, never arbitrary pickles). ``open_checkpoint`` opens the
+oracle's or a baseline's own checkpoint of a run directory in one call, naming the command that makes it."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import asdict
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import torch
+
+from ..config import ModelConfig, UserError
+from ..errors import cut
+from ..policy.transformer import CommTransformer
+from ..utils.cpu import runtime
+from ..utils.io import ArtifactError, atomic_write_bytes
+from .commands import train_command
+from .layout import RunDir
+
+if TYPE_CHECKING:
+    from ..config import RunConfig
+
+CHECKPOINT_FORMAT = "neurosym-policy/1"
+
+
+def checkpoint_bytes(payload: dict[str, Any]) -> bytes:
+    """The bytes of a torch file holding ``payload`` (written by the caller, atomically, with its siblings)."""
+    buf = io.BytesIO()
+    torch.save(payload, buf)
+    return buf.getvalue()
+
+
+def save_checkpoint(path: Path, payload: dict[str, Any]) -> None:
+    """Write ``payload`` to ``path`` atomically (a reader sees the old file or the new one, never half of one)."""
+    atomic_write_bytes(Path(path), checkpoint_bytes(payload))
+
+
+def load_payload(path: Path, made_by: str, fmt: str, what: str) -> dict[str, Any]:
+    """Load a torch file of format ``fmt`` safely (``weights_only=True``: tensors and plain data, never arbitrary
+    pickles); ``made_by`` is the command that creates it, named in the one-line error."""
+    path = Path(path)
+    if not path.exists():
+        raise ArtifactError(f"no {what} at {path}; create it with `{made_by}`")
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # truncated file, foreign pickle, wrong format: all the same to the user
+        raise ArtifactError(f"corrupt {what} {path} ({type(e).__name__}); delete it and re-run `{made_by}`") from None
+    if not isinstance(payload, dict) or payload.get("format") != fmt:
+        raise ArtifactError(f"{path} is not a {fmt} file; re-run `{made_by}`")
+    return payload
+
+
+def non_finite(obj: Any, where: str = "") -> str | None:
+    """Where the first nan or inf of a payload's float tensors is (``where`` + its keys and indices, as
+    ``state_dict.w``, ``[0].rel``), or None: nested dicts, lists and tuples are searched."""
+    if isinstance(obj, torch.Tensor):
+        return where or "a tensor" if obj.is_floating_point() and not bool(torch.isfinite(obj).all()) else None
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, (list, tuple)) else ()
+    for k, v in items:
+        found = non_finite(v, f"{where}.{k}" if isinstance(k, str) else f"{where}[{k}]")
+        if found:
+            return found.lstrip(".")
+    return None
+
+
+def load_checkpoint(path: Path, made_by: str) -> dict[str, Any]:
+    """A policy checkpoint (weights, architecture, config, resume state); one with a nan or inf weight (a
+    diverged training, saved before training refused to save them) is refused: it would evaluate as nan."""
+    payload = load_payload(path, made_by, CHECKPOINT_FORMAT, "checkpoint")
+    why = _checkpoint_problem(payload)
+    if why:  # the right format tag, but keys missing or weights of other shapes: never half-loaded
+        raise ArtifactError(f"{path} is not a usable checkpoint: {why}; delete it and re-run `{made_by}`")
+    bad = non_finite({part: payload.get(part) for part in ("state_dict", "comm_state")})
+    if bad:
+        raise ArtifactError(f"{path} holds non-finite weights ({bad}: a diverged training); re-run `{made_by}` "
+                            "with overwrite=true and a smaller optim.lr")
+    return payload
+
+
+def open_checkpoint(cfg: "RunConfig", *, oracle: bool = False) -> dict[str, Any]:
+    """The checkpoint of the weights ``cfg``'s baseline runs on (train/<model>/model.pt), or with ``oracle`` the
+    oracle's (train/oracle/model.pt), checked whole; a missing or unusable one names the command that makes it."""
+    run = RunDir(cfg)
+    return load_checkpoint(run.oracle_file if oracle else run.model_file, train_command(cfg, oracle=oracle))
+
+
+_CHECKPOINT_KEYS = (("state_dict", dict), ("arch", dict), ("config", dict), ("fit", dict), ("done", bool))
+"""what every reader of a checkpoint takes from it (``policy_payload`` writes them)"""
+
+
+def _checkpoint_problem(payload: dict[str, Any]) -> str | None:
+    """Why a payload of the checkpoint format cannot be used (a key missing or of another type, weights that do
+    not fit the architecture it records), or None. The model is built and loaded strictly to find out."""
+    for key, typ in _CHECKPOINT_KEYS:
+        if not isinstance(payload.get(key), typ):
+            return f"{key!r} is missing or not a {typ.__name__}"
+    fit = payload["fit"]
+    if not (isinstance(fit.get("step"), int) and fit["step"] >= 0 and isinstance(fit.get("history"), list)):
+        return "'fit' has no step count and history"
+    try:
+        policy_from_payload(payload)
+    except (KeyError, TypeError, ValueError, RuntimeError, UserError) as e:
+        lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+        return f"its weights do not fit the architecture it records ({cut(' '.join(lines[1:2] or lines[:1]), 160)})"
+    return None
+
+
+# ------------------------------------------------------------------------------------------- policies
+def policy_payload(policy: CommTransformer, model_cfg: ModelConfig, run_cfg: dict, fit: dict, done: bool) -> dict:
+    """A self-describing checkpoint: the weights plus everything needed to rebuild and resume the model."""
+    return {
+        "format": CHECKPOINT_FORMAT,
+        "state_dict": policy.state_dict(),
+        "arch": {"obs_dim": policy.obs_dim, "pair_dim": policy.pair_dim, "action_dim": policy.action_dim,
+                 "rounds": policy.n_rounds,
+                 **asdict(model_cfg)},
+        "config": run_cfg,
+        "runtime": runtime(),  # the kernels it was trained with (utils/cpu.py)
+        "fit": fit,
+        "done": done,
+    }
+
+
+def policy_from_payload(payload: dict[str, Any]) -> CommTransformer:
+    """The transformer a checkpoint records, its weights loaded (on the CPU)."""
+    arch = dict(payload["arch"])
+    model = CommTransformer(arch.pop("obs_dim"), arch.pop("action_dim"), arch.pop("rounds"), pair_dim=arch.pop("pair_dim", 2),
+                            cfg=ModelConfig(**arch))  # checkpoints before pair_dim was recorded: 2
+    model.load_state_dict(payload["state_dict"])
+    return model
