@@ -70,12 +70,13 @@ def child(a: argparse.Namespace) -> None:
     t0, c0 = time.perf_counter(), time.process_time()
     data = collect(env, pol, a.rollouts, 10, torch.Generator().manual_seed(0), torch.device("cpu"))
     collect_s, collect_cpu = time.perf_counter() - t0, time.process_time() - c0
-    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(1),
-                      torch.device("cpu"), backend="auto")
+    sc = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=5, samples=1,
+                      gen=torch.Generator().manual_seed(1), device=torch.device("cpu"), backend="auto")
     space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), 5)
     rng = random.Random(0)
     c0 = time.process_time()
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, a.mcmc, 1, 0.0, 0.1, rng)
+    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, steps=a.mcmc, restarts=1,
+                     final_fraction=0.0, temperature=0.1, rng=rng)
     mcmc_cpu = time.process_time() - c0
     print(json.dumps({"runtime": runtime(), "step_s": statistics.median(wall), "step_cpu": statistics.median(cpu_s),
                       "steps": len(wall), "collect_s": collect_s, "collect_cpu": collect_cpu,

@@ -70,10 +70,12 @@ def measure(n: int, threads: int) -> dict:
     out["eval_rollouts_per_s"] = batch / (time.perf_counter() - t0)
 
     data = collect(env, pol, 10, 1, torch.Generator().manual_seed(2), cpu)  # 500 states
-    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 5, 1, torch.Generator().manual_seed(3), cpu)
+    sc = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=5, samples=1,
+                      gen=torch.Generator().manual_seed(3), device=cpu)
     space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), 5)
     rng = random.Random(0)
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, 300, 1, 0.0, 0.1, rng)
+    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, steps=300, restarts=1,
+                     final_fraction=0.0, temperature=0.1, rng=rng)
     progs = [Program((random_rules(space, rng),)) for _ in range(2)]
     t0 = time.perf_counter()
     for p in progs:

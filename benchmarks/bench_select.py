@@ -53,8 +53,8 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     cpu = torch.device("cpu")
 
     def scorer(d, g):
-        return CachedScorer(policy, env, d, cfg.task.rounds - 1, features, lam, "paper", rules, 1,
-                            torch.Generator().manual_seed(g), cpu)
+        return CachedScorer(policy, env, d, round_idx=cfg.task.rounds - 1, version=features, lam=lam, objective="paper",
+                            cap=rules, samples=1, gen=torch.Generator().manual_seed(g), device=cpu)
 
     full = scorer(data, 1)
     coarse = scorer(subsample(data, sch["coarse"]), 2) if sch["coarse"] > 1 else None
@@ -66,8 +66,9 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
         if row["best"] < curve[-1][1] - 1e-12:
             curve.append([time.perf_counter() - t0, row["best"]])
 
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), full, sch["steps"], 4, 0.2,
-                     0.1, rng, on_step, sch["patience"], coarse)
+    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), full, steps=sch["steps"],
+                     restarts=4, final_fraction=0.2, temperature=0.1, rng=rng, on_step=on_step,
+                     patience=sch["patience"], coarse=coarse)
     total = time.perf_counter() - t0
     curve.append([total, res.best_score.total])
     return {"schedule": schedule, "rules": rules, "lam": lam, "features": features, "seed": seed, "seconds": total,

@@ -67,8 +67,8 @@ def main() -> None:
 
     def scorer(stride: int) -> CachedScorer:
         data = collect(env, pol, a.rollouts, stride, torch.Generator().manual_seed(0), cpu)
-        return CachedScorer(pol, env, data, 0, "v1", a.lam, "paper", a.rules, 1,
-                            torch.Generator().manual_seed(1), cpu)
+        return CachedScorer(pol, env, data, round_idx=0, version="v1", lam=a.lam, objective="paper", cap=a.rules,
+                            samples=1, gen=torch.Generator().manual_seed(1), device=cpu)
 
     sub, full = scorer(a.stride), scorer(1)
     print(f"stride {a.stride}: {sub.total_states} states; stride 1: {full.total_states} states")
@@ -84,8 +84,8 @@ def main() -> None:
             sub.accept()
 
     rng = random.Random(0)
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), Recording(), a.steps, 4, 0.2,
-                     0.1, rng)
+    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), Recording(), steps=a.steps,
+                     restarts=4, final_fraction=0.2, temperature=0.1, rng=rng)
     print(f"MCMC on stride {a.stride}: {a.steps} steps, {1000 / res.proposals_per_second:.1f} ms per proposal")
     seen: dict = {}
     pick = random.Random(1)

@@ -127,8 +127,9 @@ def estimate_gb(baseline: str, n: int, mode: str, steps: int, batch: int) -> flo
     from neurosym_cli.tasks.swarm import SwarmConfig
 
     cfg = SwarmConfig(name="swarm")
-    return estimate_bytes(n, 1 if mode == "eval" else batch, steps if mode == "train" else 1, 1, ModelConfig(), 2,
-                          dense=baseline in DENSE, training=mode == "train", sparse_from=cfg.sparse_from) / 2 ** 30
+    return estimate_bytes(n, batch=1 if mode == "eval" else batch, horizon=steps if mode == "train" else 1, rounds=1,
+                          model=ModelConfig(), k=2, dense=baseline in DENSE, training=mode == "train",
+                          sparse_from=cfg.sparse_from) / 2 ** 30
 
 
 def slope(points: list[tuple[int, float]]) -> float:

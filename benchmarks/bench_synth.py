@@ -58,13 +58,13 @@ def main() -> None:
     backends = ["numba", "torch"] if a.backend == "both" else [a.backend]
     for backend in backends:  # the same search (seed, programs) with each back-end of the cached scorer
         t0 = time.perf_counter()
-        sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", a.rules, 1,
-                          torch.Generator().manual_seed(1), dev, backend=backend)
+        sc = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=a.rules, samples=1,
+                          gen=torch.Generator().manual_seed(1), device=dev, backend=backend)
         space = SearchSpace(feature_quantiles(sc, torch.Generator().manual_seed(0)), a.rules)
         setups[backend] = time.perf_counter() - t0
         rng = random.Random(0)
-        res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, a.steps, 1, 0.0, 0.1,
-                         rng)
+        res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, steps=a.steps,
+                         restarts=1, final_fraction=0.0, temperature=0.1, rng=rng)
         rates[backend] = res.proposals_per_second
         rows[backend] = sc.rows_recomputed / a.steps
         print(f"cached scorer ({backend:5s}): {rates[backend]:8.1f} proposals/s  ({1000 / rates[backend]:.1f} ms each; "

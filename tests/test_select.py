@@ -106,11 +106,13 @@ def test_patience_ends_stalled_phases_and_coarse_restarts_are_rescored_on_the_wh
     rng = random.Random(0)
     step = lambda r: ((r[0] + rng.choice((-1, 1)),), "shift")  # noqa: E731
     full = _Bowl()
-    res = metropolis(lambda: (5,), step, full, 2000, 2, 0.2, 0.01, rng, patience=50)
+    res = metropolis(lambda: (5,), step, full, steps=2000, restarts=2, final_fraction=0.2, temperature=0.01, rng=rng,
+                     patience=50)
     assert res.best_score.total == 1.0 and set(res.stopped) == {"restart1", "restart2", "final"}
     assert sum(res.proposed.values()) < 600  # three phases, each stopped ~50 proposals after its optimum
     full, coarse = _Bowl(), _Bowl(shift=100.0)
-    res = metropolis(lambda: (5,), step, full, 400, 2, 0.25, 0.01, random.Random(1), coarse=coarse)
+    res = metropolis(lambda: (5,), step, full, steps=400, restarts=2, final_fraction=0.25, temperature=0.01,
+                     rng=random.Random(1), coarse=coarse)
     assert coarse.calls > full.calls  # the restarts ran on the coarse scorer
     assert res.best_score.total == full.score(res.best).total  # the best is a whole-data score, never a coarse one
 

@@ -58,7 +58,8 @@ def test_dataset_shapes():
 
 def test_incremental_scoring_equals_full_scoring():
     env, pol, data = _setup()
-    sc = CachedScorer(pol, env, data, 0, "v2", 0.5, "paper", 3, 2, torch.Generator().manual_seed(1), CPU)
+    sc = CachedScorer(pol, env, data, round_idx=0, version="v2", lam=0.5, objective="paper", cap=3, samples=2,
+                      gen=torch.Generator().manual_seed(1), device=CPU)
     space = _space(sc, 3)
     rng = random.Random(0)
     rules = random_rules(space, rng)
@@ -80,7 +81,8 @@ def test_random_rules_at_different_positions_are_independent():
     """Two copies of `random(filter(true, l))` pick independently, as at run time: in-degree 2 where the draws
     differ (shared random numbers would make the second copy a duplicate and the in-degree always 1)."""
     env, pol, data = _setup()
-    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU)
+    sc = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=2, samples=1,
+                      gen=torch.Generator().manual_seed(1), device=CPU)
     rule = RandomRule(TrueCond())
     a, b = sc.picks_of(rule, 0), sc.picks_of(rule, 1)
     same = sum(int((x == y).sum()) for x, y in zip(a, b))
@@ -97,8 +99,8 @@ def test_incremental_scoring_two_rounds():
     task = UnlabeledConfig(name="u", horizon=6, rounds=2, agents_per_group=5)
     env, pol, data = _setup(task, rounds=2, rollouts=3)
     for r in (0, 1):
-        sc = CachedScorer(pol, env, data, r, "v1", 0.7, "hinge", 2, 1, torch.Generator().manual_seed(1),
-                          CPU)
+        sc = CachedScorer(pol, env, data, round_idx=r, version="v1", lam=0.7, objective="hinge", cap=2, samples=1,
+                          gen=torch.Generator().manual_seed(1), device=CPU)
         space = _space(sc, 2)
         rng = random.Random(r)
         _walk_matches_full_forward(sc, space, rng, random_rules(space, rng))
@@ -117,12 +119,13 @@ def test_mcmc_recovers_a_planted_program():
         with torch.no_grad():
             out = pol(obs, lambda logits, r: picks_to_mask(rule_picks(planted[0], feats, None)[..., None], b.n_agents))
         planted_data.append(DataBucket(b.agent, b.rel, env.target(out.action)))
-    sc = CachedScorer(pol, env, planted_data, 0, "v1", 0.0, "paper", 1, 1,
-                      torch.Generator().manual_seed(0), CPU)
+    sc = CachedScorer(pol, env, planted_data, round_idx=0, version="v1", lam=0.0, objective="paper", cap=1, samples=1,
+                      gen=torch.Generator().manual_seed(0), device=CPU)
     assert sc.score(planted).l1 < 1e-5
     space = _space(sc, 1, det=True)
     rng = random.Random(3)
-    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, 400, 2, 0.3, 0.1, rng)
+    res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, steps=400, restarts=2,
+                     final_fraction=0.3, temperature=0.1, rng=rng)
     assert res.best_score.l1 < 1e-3, res.best
     got = torch.cat([p.flatten() for p in sc.picks_of(res.best[0])])
     want = torch.cat([p.flatten() for p in sc.picks_of(planted[0])])
@@ -208,10 +211,10 @@ def test_compiled_rule_scans_equal_the_torch_evaluator():
     if not kernels.AVAILABLE:
         pytest.skip("numba not installed")
     env, pol, data = _setup()
-    fast = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
-                        CPU, backend="numba")
-    ref = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 2, torch.Generator().manual_seed(1),
-                       CPU, backend="torch")
+    fast = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=2, samples=2,
+                        gen=torch.Generator().manual_seed(1), device=CPU, backend="numba")
+    ref = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=2, samples=2,
+                       gen=torch.Generator().manual_seed(1), device=CPU, backend="torch")
     space = _space(ref, 2)
     covered = 0
     for k, rule in enumerate(_rule_zoo(space, random.Random(0))):
@@ -238,12 +241,12 @@ def test_compiled_and_torch_scorers_run_the_same_search(case):
         rnd, objective = 0, "hinge"
     runs = []
     for backend in ("numba", "torch"):
-        sc = CachedScorer(pol, env, data, rnd, "v1", 0.5, objective, 3, 1,
-                          torch.Generator().manual_seed(1), CPU, backend=backend)
+        sc = CachedScorer(pol, env, data, round_idx=rnd, version="v1", lam=0.5, objective=objective, cap=3, samples=1,
+                          gen=torch.Generator().manual_seed(1), device=CPU, backend=backend)
         space = _space(sc, 3)
         rng = random.Random(5)
-        res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, 150, 2, 0.2, 0.1,
-                         rng)
+        res = metropolis(lambda: random_rules(space, rng), lambda r: propose(r, space, rng), sc, steps=150, restarts=2,
+                         final_fraction=0.2, temperature=0.1, rng=rng)
         runs.append((res, sc))
     (a, sa), (b, sb) = runs
     assert a.best == b.best
@@ -270,8 +273,8 @@ def test_scorer_beyond_127_agents(backend):
     pos = torch.rand(s, n, 2, generator=g) * 30
     agent = torch.randn(s, n, 2, generator=g)
     data = [DataBucket(agent, pos[:, :, None, :] - pos[:, None, :, :], torch.randn(s, n, 2, generator=g))]
-    sc = CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 3, 1, torch.Generator().manual_seed(1),
-                      CPU, backend=backend)
+    sc = CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=3, samples=1,
+                      gen=torch.Generator().manual_seed(1), device=CPU, backend=backend)
     far = ArgMaxRule(Linear((("d", 1.0),)), TrueCond())  # the farthest agent: often an index above 127
     picks = sc.picks_of(far)[0].long()
     assert int(picks.max()) > 127
@@ -319,8 +322,8 @@ def _planted_scorer(lam=0.0):
             out = pol(Observation(b.agent, b.rel),
                       lambda logits, r: picks_to_mask(rule_picks(planted, feats, None)[..., None], b.n_agents))
         planted_data.append(DataBucket(b.agent, b.rel, env.target(out.action)))
-    return planted, CachedScorer(pol, env, planted_data, 0, "v1", lam, "paper", 3, 1,
-                                 torch.Generator().manual_seed(0), CPU)
+    return planted, CachedScorer(pol, env, planted_data, round_idx=0, version="v1", lam=lam, objective="paper", cap=3,
+                                 samples=1, gen=torch.Generator().manual_seed(0), device=CPU)
 
 
 def test_never_holds_finds_contradictions():
@@ -444,8 +447,8 @@ def test_large_data_fallback_scores_as_the_cached_messages_on_a_4_wide_task(back
     data = collect(env, pol, 3, 2, torch.Generator().manual_seed(0), CPU)
 
     def scorer():
-        return CachedScorer(pol, env, data, 0, "v1", 0.5, "paper", 2, 1, torch.Generator().manual_seed(1), CPU,
-                            backend=backend)
+        return CachedScorer(pol, env, data, round_idx=0, version="v1", lam=0.5, objective="paper", cap=2, samples=1,
+                            gen=torch.Generator().manual_seed(1), device=CPU, backend=backend)
 
     cached = scorer()
     monkeypatch.setattr(prepared, "MESSAGES_MAX_PAIRS", 0)

@@ -32,7 +32,7 @@ RAMP_PAIR_BYTES = 60 * 24  # per agent: the collision pairs within reach a step 
 SCAN_BYTES = 12 * 4  # per pair of the filter scan's chunk: offsets, features, masks, scores
 
 
-def estimate_bytes(n: int, batch: int, horizon: int, rounds: int, model: ModelConfig, k: int, dense: bool,
+def estimate_bytes(n: int, *, batch: int, horizon: int, rounds: int, model: ModelConfig, k: int, dense: bool,
                    training: bool, sparse_from: int) -> int:
     """Peak bytes of a rollout of ``batch`` episodes of ``n`` agents over ``horizon`` steps (training) or of one
     evaluation step, for the dense path (``dense``) or a provider of ``k`` picks per round."""
@@ -79,8 +79,8 @@ class DoesNotFit(Exception):
     """Mixed into the ConfigError of a team that cannot fit, so `neurosym stress` can tell it from a missing model."""
 
 
-def require_fits(what: str, n: int, batch: int, horizon: int, rounds: int, model: ModelConfig, k: int, dense: bool,
-                 training: bool, sparse_from: int, limit: int | None = None) -> int:
+def require_fits(what: str, n: int, *, batch: int, horizon: int, rounds: int, model: ModelConfig, k: int,
+                 dense: bool, training: bool, sparse_from: int, limit: int | None = None) -> int:
     """The estimate in bytes, or a one-line ConfigError when it exceeds ``limit`` (default: the memory available
     now), naming the estimate and the largest team that fits. ``what`` names the run ('tf-full evaluation')."""
     from ..errors import ConfigError
@@ -89,11 +89,12 @@ def require_fits(what: str, n: int, batch: int, horizon: int, rounds: int, model
         pass
 
     limit = available_bytes() if limit is None else limit
-    need = estimate_bytes(n, batch, horizon, rounds, model, k, dense, training, sparse_from)
+    run = dict(batch=batch, horizon=horizon, rounds=rounds, model=model, k=k, dense=dense, training=training,
+               sparse_from=sparse_from)  # everything but the team size
+    need = estimate_bytes(n, **run)
     if need <= limit:
         return need
-    best = largest_fitting(lambda m: estimate_bytes(m, batch, horizon, rounds, model, k, dense, training,
-                                                    sparse_from) <= limit, limit=max(n, 2))
+    best = largest_fitting(lambda m: estimate_bytes(m, **run) <= limit, limit=max(n, 2))
     gb = 2 ** 30
     fits = f"the largest team that fits is N = {best:,}" if best else "no team fits"
     raise TooLarge(f"N = {n:,} agents does not fit: {what} needs about {need / gb:.1f} GB ({batch} episode(s) at "

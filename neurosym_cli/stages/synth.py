@@ -105,14 +105,15 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     tag = rd.program_tag
     for r in range(cfg.task.rounds):
         # appendix A: each round's program is searched alone, the other rounds keep soft attention
-        scorer = CachedScorer(policy, env, data, r, cfg.features, cfg.lam, cfg.synth.objective,
-                              cfg.rules, cfg.synth.random_samples, generator(cfg.seed, STREAM_SYNTH, r), device,
-                              backend=cfg.synth.backend)
+        scorer = CachedScorer(policy, env, data, round_idx=r, version=cfg.features, lam=cfg.lam,
+                              objective=cfg.synth.objective, cap=cfg.rules, samples=cfg.synth.random_samples,
+                              gen=generator(cfg.seed, STREAM_SYNTH, r), device=device, backend=cfg.synth.backend)
         coarse = None
         if cfg.synth.coarse > 1:  # the restarts' scorer: every coarse-th state of D, its own random numbers
-            coarse = CachedScorer(policy, env, subsample(data, cfg.synth.coarse), r, cfg.features,
-                                  cfg.lam, cfg.synth.objective, cfg.rules, cfg.synth.random_samples,
-                                  generator(cfg.seed, STREAM_SYNTH, 300 + r), device, backend=cfg.synth.backend)
+            coarse = CachedScorer(policy, env, subsample(data, cfg.synth.coarse), round_idx=r, version=cfg.features,
+                                  lam=cfg.lam, objective=cfg.synth.objective, cap=cfg.rules,
+                                  samples=cfg.synth.random_samples, gen=generator(cfg.seed, STREAM_SYNTH, 300 + r),
+                                  device=device, backend=cfg.synth.backend)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
         with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp, \

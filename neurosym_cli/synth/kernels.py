@@ -63,16 +63,27 @@ def _dedup(picks: np.ndarray, valid: np.ndarray) -> None:
         valid[k] = ok
 
 
-@njit(**_JIT)
-def incremental_rows(new_cols, changed, table, n, codes, memo_key, memo_l1, l1, deg_in, deg_out,
-                     todo_rows, todo_picks, todo_valid, todo_keys):
+def incremental_rows(new_cols: np.ndarray, changed: np.ndarray, *, table: np.ndarray, n: int, codes: np.ndarray,
+                     memo_key: np.ndarray, memo_l1: np.ndarray, l1: np.ndarray, deg_in: np.ndarray,
+                     deg_out: np.ndarray, todo_rows: np.ndarray, todo_picks: np.ndarray, todo_valid: np.ndarray,
+                     todo_keys: np.ndarray) -> tuple[int, int]:
     """Apply the changed rules' new picks to one bucket, in place on copies of the accepted state.
 
     new_cols (C, R) int8 or int16: the new picks of the changed rules; changed (C,) int64: their positions in the table.
     table (R, K) (as new_cols), l1 (R,) float32, deg_in/deg_out (R,) int32: updated in place (callers pass copies).
+    n: agents per state; codes (N,) int64: each agent's random code (a set's name is 1 + the sum of its members').
+    memo_key (R, MEMO) int64, memo_l1 (R, MEMO) float32: the memo (no rows before the last round).
     An agent whose picked set is unchanged keeps its L1; one whose new set is in the memo (one slot per set name,
     ``key % MEMO``) takes the remembered L1; the others are listed in todo_* (rows, (M, K) picks, valid, keys)
     for the forward pass. Returns (M, memo hits)."""
+    return _incremental_rows(new_cols, changed, table, n, codes, memo_key, memo_l1, l1, deg_in, deg_out,
+                             todo_rows, todo_picks, todo_valid, todo_keys)
+
+
+@njit(**_JIT)
+def _incremental_rows(new_cols, changed, table, n, codes, memo_key, memo_l1, l1, deg_in, deg_out,
+                      todo_rows, todo_picks, todo_valid, todo_keys):
+    """``incremental_rows``, compiled (numba takes its arguments by position)."""
     r_total, k_rules = table.shape
     n_memo = memo_key.shape[1]
     use_memo = memo_key.shape[0] > 0
@@ -175,13 +186,24 @@ def _test_value(fp, fa, n_pair, r, rj, feat, w, nterm, t):
     return acc
 
 
-@njit(**_JIT)
-def scan_picks(fp, fa, n, op, feat, w, nterm, thr, agent_level, order, natural, out):
-    """out (R,) int8 or int16: each row's pick under one rule, -1 when its filter passes nobody.
+def scan_picks(spec: RuleSpec, *, pair_feats: np.ndarray, agent_feats: np.ndarray, n: int,
+               order: np.ndarray | None, out: np.ndarray) -> None:
+    """out (R,) int8 or int16: each row's pick under the rule ``spec``, -1 when its filter passes nobody.
 
-    op: filter shape (above); feat (2, T) int64, w (2, T) float32, nterm (2,), thr (2,) float32, agent_level (2,)
-    bool: the tests. order (R, N) (as out): each row's candidates best first (ties: lower index first, as torch's max);
-    natural: ignore ``order`` and use 0..N-1 (a score that is the same for every candidate)."""
+    pair_feats (P, R N) and agent_feats (A, R): the stacked features (``Prepared.scan_inputs``); n: agents per
+    state. order (R, N) (as out): each row's candidates best first (ties: lower index first, as torch's max); None
+    for a rule whose score is the same for every candidate (``spec.order`` None: index order 0..N-1)."""
+    natural = spec.order is None
+    if natural:
+        order = np.zeros((1, 1), out.dtype)  # unused, but numba wants an array of the picks' type
+    _scan_picks(pair_feats, agent_feats, n, spec.op, spec.feat, spec.w, spec.nterm, spec.thr, spec.agent_level,
+                order, natural, out)
+
+
+@njit(**_JIT)
+def _scan_picks(fp, fa, n, op, feat, w, nterm, thr, agent_level, order, natural, out):
+    """``scan_picks``, compiled. op: filter shape (above); feat (2, T) int64, w (2, T) float32, nterm (2,),
+    thr (2,) float32, agent_level (2,) bool: the tests; natural: ignore ``order`` and use 0..N-1."""
     n_pair = fp.shape[0]
     r_total = out.shape[0]
     # the common test, one pair feature times a weight, read through a hoisted 1-D view (no term loop)

@@ -105,6 +105,7 @@ def metropolis(
     init: Callable[[], tuple[Rule, ...]],
     propose: Callable[[tuple[Rule, ...]], tuple[tuple[Rule, ...], str]],
     scorer: Scorer,
+    *,
     steps: int,
     restarts: int,
     final_fraction: float,

@@ -93,7 +93,7 @@ class _Current:
 class CachedScorer:
     """Incremental scorer of programs for one communication round (paper appendix A: one program per round)."""
 
-    def __init__(self, policy: CommTransformer, env: Task, buckets: list[DataBucket],
+    def __init__(self, policy: CommTransformer, env: Task, buckets: list[DataBucket], *,
                  round_idx: int, version: str, lam: float, objective: str, cap: int, samples: int,
                  gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto"):
         self.policy = policy.eval()
@@ -164,13 +164,12 @@ class CachedScorer:
         out = torch.empty(self.samples if random_rule else 1, d.s * d.n, dtype=d.pick_dtype)
         for r in range(out.shape[0]):
             if spec.order is None:
-                order = np.zeros((1, 1), out.numpy().dtype)  # unused (index order)
+                order = None  # index order
             elif random_rule:
                 order = d.order(("random", position, r), self._uniforms(bi, position, r))
             else:
                 order = d.order(spec.order)
-            kernels.scan_picks(fp, fa, d.n, spec.op, spec.feat, spec.w, spec.nterm, spec.thr, spec.agent_level,
-                               order, spec.order is None, out[r].numpy())
+            kernels.scan_picks(spec, pair_feats=fp, agent_feats=fa, n=d.n, order=order, out=out[r].numpy())
         return out
 
     # ---------------------------------------------------------------------------------------- forward
@@ -239,9 +238,10 @@ class CachedScorer:
         rows, new, valid, keys = d.todo
         new_cols = torch.stack([picks[k] for k in changed])  # (C, R)
         m, hits = kernels.incremental_rows(  # the memo is empty (no slots) before the last round
-            new_cols.numpy(), np.asarray(changed, dtype=np.int64), table.numpy(), d.n, d.codes.numpy(),
-            d.memo_key.numpy(), d.memo_l1.numpy(), l1.numpy(), deg_in.numpy(), deg_out.numpy(),
-            rows.numpy(), new.numpy(), valid.numpy(), keys.numpy())
+            new_cols.numpy(), np.asarray(changed, dtype=np.int64), table=table.numpy(), n=d.n, codes=d.codes.numpy(),
+            memo_key=d.memo_key.numpy(), memo_l1=d.memo_l1.numpy(), l1=l1.numpy(), deg_in=deg_in.numpy(),
+            deg_out=deg_out.numpy(), todo_rows=rows.numpy(), todo_picks=new.numpy(), todo_valid=valid.numpy(),
+            todo_keys=keys.numpy())
         x = cur.x
         if m and self.last_round:
             fresh = self._l1_rows(d, rows[:m], new[:m], valid[:m])

@@ -32,7 +32,7 @@ def feature_quantiles(scorer: CachedScorer, gen: torch.Generator, n_q: int = 49,
     return out
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RoundSpec:
     steps: int
     restarts: int
