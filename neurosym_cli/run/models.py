@@ -48,8 +48,8 @@ def check_memory(cfg: RunConfig, task, comm: CommProvider, training: bool) -> No
     per_seed = len(cfg.task.test_settings) or cfg.task.eval_episodes
     batch = cfg.budget.batch_rollouts if training else per_seed * cfg.budget.eval_seeds
     what = f"{cfg.baseline.name} {'training' if training else 'evaluation'}"
-    require_fits(what, n, batch, cfg.horizon, task.rounds, cfg.model, cfg.rules, not picks_first(comm), training,
-                 getattr(cfg.task, "sparse_from", 1 << 62))
+    require_fits(what, n, batch=batch, horizon=cfg.horizon, rounds=task.rounds, model=cfg.model, k=cfg.rules,
+                 dense=not picks_first(comm), training=training, sparse_from=getattr(cfg.task, "sparse_from", 1 << 62))
 
 
 def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:
