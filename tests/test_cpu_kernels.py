@@ -121,7 +121,7 @@ def job(cfg, info):
 POOL = """
 import json, os
 from neurosym_cli.stages import RunInfo
-from neurosym_cli.stages.select import run_jobs
+from neurosym_cli.stages.jobs import run_jobs
 import probe
 
 print(json.dumps({"pid": os.getpid(), "rows": run_jobs(probe.job, [0, 1], RunInfo(), 2, "probe", name=str)}))

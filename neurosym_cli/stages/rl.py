@@ -30,7 +30,8 @@ from ..utils.console import clock, say
 from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
-from .select import quiet_job, run_jobs, validate
+from .jobs import quiet_job, run_jobs
+from .select import validate
 
 
 def grid(cfg: RunConfig) -> list[RunConfig]:
@@ -38,6 +39,11 @@ def grid(cfg: RunConfig) -> list[RunConfig]:
     return [dataclasses.replace(cfg, cmd="train", baseline=get("rl"),
                                 rl=dataclasses.replace(cfg.rl, cost=c, shaped=s, init=i))
             for i, s, c in itertools.product(cfg.rl.grid_init, cfg.rl.grid_shaped, cfg.rl.grid_cost)]
+
+
+def setting_name(cfg: RunConfig) -> str:
+    """A setting's model name, in log lines and errors (a module-level function: the pool's workers get it pickled)."""
+    return RunDir(cfg).model_name
 
 
 def rl_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
@@ -80,7 +86,7 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     t0 = time.perf_counter()
     say(f"rl {cfg.task.name}: {len(points)} settings (cost {cfg.rl.grid_cost}, reward to go "
         f"{cfg.rl.grid_shaped}, init {cfg.rl.grid_init}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
-    rows = run_jobs(rl_job, points, info, jobs, "rl setting", name=lambda p: RunDir(p).model_name)
+    rows = run_jobs(rl_job, points, info, jobs, "rl setting", name=setting_name)
     for r in rows:
         r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
     rl1, rl2 = pick(rows)

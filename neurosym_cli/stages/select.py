@@ -18,11 +18,8 @@ from __future__ import annotations
 import dataclasses
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from concurrent.futures.process import BrokenProcessPool
-from multiprocessing import get_context
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 from .. import __version__
 from ..schemes import get
@@ -36,6 +33,7 @@ from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
+from .jobs import quiet_job, run_jobs
 
 DEGREE = "max_degree"
 """the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
@@ -129,11 +127,6 @@ def validate(cfg: RunConfig) -> dict[str, Any]:
     return result
 
 
-def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
-    """A grid job's config: plain progress lines, no program tables (many run at once)."""
-    return dataclasses.replace(cfg, progress="plain"), RunInfo(True, info.log_dir)
-
-
 def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     """One grid point: its program (searched or reused), then its validation rows."""
     from .synth import read_summary, synthesize
@@ -159,69 +152,6 @@ def retrain_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
 
 def _val_columns(v: dict[str, Any]) -> dict[str, Any]:
     return {"loss": v["loss"], "degree": v["degree"], "max_in": v["max_in"], "max_out": v["max_out"]}
-
-
-def _worker_init() -> None:
-    """A pool worker: one thread, and plain log lines on stdout (a spawned process has no logging set up, so its
-    progress lines would be lost)."""
-    import logging
-    import sys
-
-    import torch
-
-    torch.set_num_threads(1)  # one process per core: intra-op threads would only fight over the cores
-    handler = logging.StreamHandler(sys.stdout)
-    handler.setFormatter(logging.Formatter("[%(asctime)s] %(levelname)s %(message)s", "%H:%M:%S"))
-    root = logging.getLogger()
-    root.handlers[:] = [handler]
-    root.setLevel(logging.INFO)
-
-
-def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo, name: Callable[[RunConfig], str]) -> dict[str, Any]:
-    """A pool worker's job: its log lines name the grid point; a UserError comes back as a value."""
-    from ..utils.console import set_job_prefix
-
-    set_job_prefix(name(cfg))
-    try:
-        return fn(cfg, info)
-    except UserError as e:
-        return {"name": name(cfg), "error": str(e)}
-    finally:
-        set_job_prefix("")
-
-
-def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what: str,
-             name: Callable[[RunConfig], str] = point_name) -> list[dict[str, Any]]:
-    """``fn(cfg, info)`` for every config, ``jobs`` processes at once (1: in this process), in the given order;
-    ``name`` names a config in log lines and errors."""
-    t0 = time.perf_counter()
-    results: dict[int, dict[str, Any]] = {}
-
-    def done(i: int, r: dict[str, Any]) -> None:
-        results[i] = r
-        if "error" in r:
-            raise UserError(f"{what} {r['name']}: {r['error']}")
-        log.info("%s %d/%d done: %s (%s elapsed)", what, len(results), len(cfgs), r["name"],
-                 clock(time.perf_counter() - t0))
-
-    if jobs <= 1 or len(cfgs) == 1:
-        for i, c in enumerate(cfgs):
-            done(i, _job_entry(fn, c, info, name))
-    else:
-        with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"),
-                                 initializer=_worker_init) as pool:
-            futures = {pool.submit(_job_entry, fn, c, info, name): i for i, c in enumerate(cfgs)}
-            try:
-                for f in as_completed(futures):
-                    done(futures[f], f.result())
-            except BrokenProcessPool as e:  # a worker was killed (out of memory, a signal): finished jobs are kept
-                raise UserError(f"a {what} process died ({e}); what finished is on disk, rerun the same command "
-                                "to resume") from None
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
-    return [results[i] for i in range(len(cfgs))]
 
 
 # --------------------------------------------------------------------------------------------- the command
@@ -269,7 +199,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         from .synth import collect_dataset
 
         collect_dataset(points[0])  # one D for the whole grid, collected here once (parallel jobs would each do it)
-    searched = run_jobs(search_job, points, info, jobs, "program")
+    searched = run_jobs(search_job, points, info, jobs, "program", name=point_name)
     t_search = time.perf_counter() - t0
     first = choose(searched)
     finalists = [r for r in first if r["similar"]][:cfg.select.finalists]
@@ -277,7 +207,8 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         f"{next(r['name'] for r in first if r['best'])}; retraining {len(finalists)}: "
         + ", ".join(r["name"] for r in finalists))
     by_name = {point_name(p): p for p in points}
-    retrained = run_jobs(retrain_job, [by_name[r["name"]] for r in finalists], info, jobs, "retrain")
+    retrained = run_jobs(retrain_job, [by_name[r["name"]] for r in finalists], info, jobs, "retrain",
+                         name=point_name)
     final = choose(retrained)
     pick = next(r for r in final if r["picked"])
     chosen = by_name[pick["name"]]
