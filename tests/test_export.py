@@ -71,8 +71,8 @@ def test_export_then_check_passes_without_neurosym(runs, task, kind):
     assert report["neurosym_importable"] is False and report["first_mismatch"] is None
     status = {r["file"]: r["status"] for r in report["results"]}
     want_c = "ok" if shutil.which("cc") else "skipped"
-    assert status == {"program.py": "ok", "program.h": want_c, "policy.onnx": "ok", "policy.pt": "ok",
-                      "agent/*.onnx": "ok"}, report["results"]
+    assert status == {"program.py": "ok", "program.json": "ok", "program.h": want_c, "policy.onnx": "ok",
+                      "policy.pt": "ok", "agent/*.onnx": "ok", "checksums": "ok"}, report["results"]
     folder = out["folder"]
     prog = json.loads(open(f"{folder}/program.json").read())
     assert len(prog["rounds"]) == cfg.task.rounds  # unlabeled-goals: one program per round
@@ -122,7 +122,7 @@ def test_a_baseline_without_a_program_exports_the_policy_alone(runs):
     names = set(out["files"])
     assert "program.py" not in names and {"policy.onnx", "policy.pt", "golden.npz"} <= names
     report = ns.export(cfg, "tf-full", check=True)
-    assert [r["file"] for r in report["results"]] == ["policy.onnx", "policy.pt", "agent/*.onnx"]
+    assert [r["file"] for r in report["results"]] == ["policy.onnx", "policy.pt", "agent/*.onnx", "checksums"]
     assert all(r["status"] == "ok" for r in report["results"])
 
 
@@ -153,7 +153,7 @@ def test_a_program_file_without_a_trained_model_exports_the_program_alone(tmp_pa
     out = ns.export(cfg)
     assert out["program"] and not out["policy"]
     report = ns.export(cfg, check=True)
-    assert {r["file"] for r in report["results"]} == {"program.py", "program.h"}
+    assert {r["file"] for r in report["results"]} == {"program.py", "program.json", "program.h", "checksums"}
     assert report["first_mismatch"] is None
 
 
