@@ -57,8 +57,7 @@ def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None 
     items = list(overrides) if isinstance(overrides, list) else [f"{k}={_value(v)}" for k, v in
                                                                   {**(overrides or {})}.items()]
     items += [f"{k}={_value(v)}" for k, v in kwargs.items()]
-    from .argv import check_launcher
-    from .cli import check_choices
+    from .choices import check_choices, check_launcher
 
     extra = ["--config-dir", str(config_dir)] if config_dir else []
     bad = check_choices(items + extra) or check_launcher(items)  # the console script's lines, not Hydra's

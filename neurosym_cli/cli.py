@@ -23,11 +23,10 @@ def drop_working_directory() -> None:
 if __name__ == "__main__":
     drop_working_directory()
 
-import difflib  # noqa: E402  (after the working directory left sys.path)
-import logging  # noqa: E402
+import logging  # noqa: E402  (after the working directory left sys.path)
 import re  # noqa: E402
 
-from neurosym_cli.argv import check_launcher  # noqa: E402
+from neurosym_cli.choices import check_choices, check_launcher, choices  # noqa: E402
 from neurosym_cli.commands import COMMANDS  # noqa: E402
 
 EXAMPLES = """examples:
@@ -89,52 +88,6 @@ def hoist_flags(args: list[str]) -> list[str]:
             rest.append(a)
         i += 1
     return flags + rest
-
-
-def _conf_dir():
-    from importlib.util import find_spec
-    from pathlib import Path
-
-    spec = find_spec("neurosym_cli.conf")
-    return Path(spec.origin).parent if spec and spec.origin else None
-
-
-def choices(group: str, args: list[str] | None = None) -> list[str]:
-    """The options of a config group: the registered baselines; the tasks of the search path (the package's, the
-    command line's config directories, installed entry points); or the YAML files of conf/<group>/."""
-    if group == "baseline":
-        from neurosym_cli.schemes import SCHEMES
-
-        return list(SCHEMES)
-    if group == "task":
-        from neurosym_cli.tasks.registry import task_choices
-
-        return task_choices(args)
-    conf = _conf_dir()
-    return sorted(p.stem for p in (conf / group).glob("*.yaml")) if conf is not None else []
-
-
-def check_choices(args: list[str], sources: dict[str, str] | None = None) -> str | None:
-    """A one-line error for an unknown option of a config group (task=, baseline=, budget=), else None; ``sources``:
-    where a defaulted group's value came from (defaults.py), named in its error.
-
-    Hydra would say the same over a dozen lines; this names the valid choices and stays cheap (no Hydra import).
-    """
-    for a in args:
-        key, sep, value = a.partition("=")
-        if not sep or key.startswith(("+", "~", "hydra")) or key not in ("task", "baseline", "budget"):
-            continue
-        known = choices(key, args)
-        if not known:
-            return None
-        for v in value.split(","):  # sweeps: task=a,b
-            if v not in known and not v.startswith(("glob(", "choice(", "range(")):
-                where = f" (the default set by {sources[key]})" if key in (sources or {}) else ""
-                near = difflib.get_close_matches(v, known, n=1, cutoff=0.6)
-                hint = f"; did you mean {key}={near[0]}? (choices: {', '.join(known)})" if near else \
-                    f"; choose one of: {', '.join(known)}"
-                return f"unknown {key} {v!r}{where}{hint}"
-    return None
 
 
 def pin_kernels(args: list[str]) -> str | None:

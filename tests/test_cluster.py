@@ -15,7 +15,7 @@ from test_cli import run
 # --- launchers ------------------------------------------------------------------------------------------------
 
 def test_missing_cluster_plugin_is_one_line_naming_the_extra(monkeypatch):
-    from neurosym_cli.cli import check_launcher
+    from neurosym_cli.choices import check_launcher
 
     assert check_launcher(["-m", "hydra/launcher=slurm"]) is None  # installed here (dev extra)
     monkeypatch.setitem(sys.modules, "hydra_plugins.hydra_submitit_launcher", None)  # as if not installed

@@ -34,7 +34,7 @@ def _task(name="vmas/navigation", horizon=None, **over):
 def test_nested_task_yamls_are_choices(tmp_path):
     """task/vmas/navigation.yaml is the option `vmas/navigation` (Hydra's nested name), in the package and in a
     user's config directory; its defaults list resolves relative to its own folder."""
-    from neurosym_cli.cli import check_choices
+    from neurosym_cli.choices import check_choices
     from neurosym_cli.tasks.registry import task_choices, yaml_target
 
     assert {"vmas/navigation", "vmas/dispersion", "random-cross"} <= set(task_choices())
