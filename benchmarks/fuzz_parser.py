@@ -17,7 +17,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
-from test_faults import fuzz_parser  # noqa: E402  (the same mutations as the CI test)
+from test_faults_programs import fuzz_parser  # noqa: E402  (the same mutations as the CI test)
 
 from neurosym_cli.dsl import ProgramSyntaxError, parse  # noqa: E402
 
