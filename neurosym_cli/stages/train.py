@@ -100,7 +100,8 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
     if maker is not cfg.baseline:
         log.info("%s runs on the oracle's weights: training the oracle (tf-full)", cfg.baseline.name)
     env = make_task(cfg.task, cfg.horizon)
-    probe(env, cfg.task.name)  # a task that breaks the protocol is one line before any training starts
+    # a task that breaks the protocol, or outgrows its max_agents, is one line before any training starts
+    probe(env, cfg.task.name, max_agents=cfg.task.max_agents)
     seed_everything(cfg.seed)  # a provider's own parameters (rl's gate) are drawn now: from the seed, too
     comm = baseline_comm(cfg, env, scheme=maker)
     if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
@@ -201,6 +202,10 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             raise ArtifactError(f"{ckpt}: {e}; `{train_command(cfg)} overwrite=true` trains from the "
                                 "start") from None
         except Diverged as e:
+            if steps_before == 0 and e.step == 1:  # before any update: the rate played no part, the task did
+                raise ConfigError(f"{e}, before any update, so not from the learning rate: task {cfg.task.name}'s "
+                                  "cost or dynamics give non-finite values on the first rollout; check its cost() "
+                                  "and step() (and task.dt, task.v_max); nothing was saved") from None
             raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "
                               "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
     seconds = time.perf_counter() - t0

@@ -67,8 +67,25 @@ class FeatureView:
         if name not in self._cache:
             if name not in self.fmap.fns:
                 raise KeyError(f"unknown feature {name!r}; this task has: {', '.join(self.names)}")
-            self._cache[name] = self.fmap.fns[name](self)
+            self._cache[name] = self._checked(name, self.fmap.fns[name](self))
         return self._cache[name]
+
+    def _checked(self, name: str, value: object) -> Tensor:
+        """A feature's value, refused (one line naming it) unless it is a floating tensor of its declared shape:
+        (B, N, 1) for a feature of the asking agent, (B, N, N) for one of the other agent. Checked once per view and
+        feature, where it is built: a wrong shape would otherwise fail deep in the search, or broadcast silently
+        into wrong numbers in eval (an (N, N) where (B, N, 1) belongs, when B = N)."""
+        agent = self.fmap.vocab.agent_level(name)
+        want = (self.batch, self.rows, 1 if agent else self.n_agents)
+        got = tuple(value.shape) if isinstance(value, torch.Tensor) else None
+        if got != want or not value.is_floating_point():  # type: ignore[union-attr]
+            what = (f"a {type(value).__name__}" if got is None else
+                    f"shape {got}" + ("" if value.is_floating_point() else f" of {value.dtype}"))  # type: ignore
+            raise ConfigError(f"feature {name!r} of this task's feature map gives {what}, but a feature of "
+                              f"{'the asking agent' if agent else 'the other agent'} is a float tensor of shape "
+                              f"{'(B, N, 1)' if agent else '(B, N, N)'} = {want}; fix the function that computes it "
+                              "(docs/extending.md)")
+        return value  # type: ignore[return-value]
 
     def stacked(self) -> tuple[list[str], list[str], "np.ndarray", "np.ndarray"]:
         """(pair feature names, agent feature names, pair values (P, B N N), agent values (A, B N)) as float32

@@ -41,13 +41,42 @@ def import_target(target: str) -> Any:
     add_import_paths([p for p in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if p])  # in a worker
     try:
         mod = importlib.import_module(module)
-    except Exception as e:  # ImportError, or the user's module failing while it imports
+    except (Exception, SystemExit) as e:  # ImportError, the user's module failing or calling sys.exit() at import
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise ConfigError(f"task._target_={target!r}: cannot import {module!r} ({type(e).__name__}: {msg}); "
-                          f"is it on the Python path (the working directory, or an installed package)?") from None
+        if isinstance(e, SystemExit):  # would end the command with its code (0: "success", having done nothing)
+            msg = f"it called sys.exit({e.code!r}) while being imported; a task module must only define its task"
+        near = _near_module(module) if isinstance(e, ModuleNotFoundError) and e.name == module else ""
+        raise ConfigError(f"task._target_={target!r}: cannot import {module!r} ({type(e).__name__}: {msg})"
+                          + (near or "; is it on the Python path (the working directory, or an installed "
+                                     "package)?")) from None
     if not hasattr(mod, attr):
-        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}{_shadowed(module, mod)}")
+        classes = [n for n, v in vars(mod).items() if inspect.isclass(v) and not n.startswith("_")]
+        near = _did_you_mean(attr, classes, f"{module}.")
+        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}"
+                          f"{_shadowed(module, mod) or near}")
     return getattr(mod, attr)
+
+
+def _near_module(module: str) -> str:
+    """'; did you mean 'x'?' for a module name that does not exist: the closest module of its package, or of the
+    user's import paths (their *.py files and packages) and the installed task modules for a top-level name."""
+    import pkgutil
+
+    parent, _, leaf = module.rpartition(".")
+    if parent:
+        try:
+            where = list(getattr(importlib.import_module(parent), "__path__", []))
+        except Exception:
+            return ""
+        return _did_you_mean(leaf, [m.name for m in pkgutil.iter_modules(where)], f"{parent}.")
+    dirs = [d for d in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if d]
+    return _did_you_mean(leaf, [m.name for m in pkgutil.iter_modules(dirs)] + ["neurosym", "neurosym_cli"], "")
+
+
+def _did_you_mean(name: str, known: list[str], prefix: str) -> str:
+    """'; did you mean '<prefix><nearest>'?' (the nearest of ``known`` to ``name``, difflib), or ''."""
+    near = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+    return f"; did you mean {prefix + near[0]!r}?" if near else ""
 
 
 def _shadowed(module: str, mod: Any) -> str:
@@ -106,8 +135,22 @@ def typed_task(node: Any) -> Any:
     try:
         typed = OmegaConf.merge(OmegaConf.structured(schema), node)
     except OmegaConfBaseException as e:
-        raise ConfigError(f"task: {str(e).splitlines()[0]}") from None
+        raise ConfigError(value_problem(e, "task.", f"task {node.get('name', '?')}'s YAML")) from None
     return typed
+
+
+def value_problem(e: Exception, prefix: str, where: str) -> str:
+    """An OmegaConf type error as the command line's: "task.radius takes a float, not 'abc' (in task ring's
+    YAML)", naming the key its first line leaves out (``prefix``: the key's section, ``where``: its file)."""
+    first = str(e).splitlines()[0] if str(e) else type(e).__name__
+    key = getattr(e, "full_key", None)
+    if not key:
+        return f"{prefix.rstrip('.')}: {first}"
+    import re
+
+    m = re.match(r"Value '(.*)' of type '\w+' could not be converted to (\w+)", first)
+    what = f"takes {'an' if m.group(2)[0] in 'AEIOU' else 'a'} {m.group(2).lower()}, not {m.group(1)!r}" if m else first
+    return f"{prefix}{key} {what} (in {where})" if m else f"{prefix}{key}: {what} (in {where})"
 
 
 def make_task(cfg: TaskConfig, horizon: int | None = None) -> Any:
@@ -121,8 +164,8 @@ def make_task(cfg: TaskConfig, horizon: int | None = None) -> Any:
 
 
 def probe(task: Any, name: str, *, max_agents: int | None = None) -> None:
-    """Reset two episodes and observe them: wrong shapes are one line naming the method and the shapes, before any
-    training starts. ``max_agents``: the config's N of the largest episode (``TaskConfig.max_agents``), which the
+    """Reset two episodes, observe them and step them once with a zero action: wrong shapes, and a cost that is not
+    finite, are one line naming the method, before any training starts. ``max_agents``: the config's N of the largest episode (``TaskConfig.max_agents``), which the
     memory and K < N checks trust; an episode with more agents is one line saying what to add."""
     import torch
 
@@ -153,6 +196,18 @@ def probe(task: Any, name: str, *, max_agents: int | None = None) -> None:
         if got != shape:
             raise ConfigError(f"task {name}: observe() gives {field} of shape {got}, but obs_dim/pair_dim declare "
                               f"{shape}")
+    action = torch.zeros(b, n, task.action_dim)
+    try:
+        cost = task.cost(task.step(s, action), action)
+    except Exception as e:
+        raise ConfigError(f"task {name}: step() and cost() of a zero action failed ({type(e).__name__}: "
+                          f"{str(e).splitlines()[0] if str(e) else ''})") from None
+    if not isinstance(cost, torch.Tensor) or not bool(torch.isfinite(cost).all()):
+        what = (f"a {type(cost).__name__}" if not isinstance(cost, torch.Tensor)
+                else f"{float(cost[~torch.isfinite(cost)].flatten()[0])}")
+        raise ConfigError(f"task {name}: cost() of a zero action from reset()'s first state is {what}, not a finite "
+                          "tensor: the task's cost is non-finite before any training (not the learning rate); fix "
+                          "its cost() or step() (a norm or division at distance 0? neurosym.tasks.safe_norm)")
 
 
 # ------------------------------------------------------------------------------ where task YAMLs are found
@@ -300,12 +355,28 @@ def _default_task(config_name: str) -> str:
     return "random-cross"
 
 
+def check_not_builtin(name: str, args: list[str]) -> None:
+    """Refuse a user's task YAML with the name of a built-in task: Hydra loads the built-in one (the package's
+    config directory comes first), so the user's file would be silently ignored."""
+    conf = _installed_conf()
+    if conf is None or not (conf / "task" / f"{name}.yaml").is_file():
+        return
+    mine = [d / "task" / f"{name}.yaml" for d in search_dirs(args) if d.resolve() != conf.resolve()]
+    mine = [f for f in mine if f.is_file()]
+    if mine:
+        folder, _, stem = name.rpartition("/")
+        other = f"{folder}/my-{stem}".lstrip("/")
+        raise ConfigError(f"task={name}: your {mine[0]} has the name of a built-in task, and the built-in one is what "
+                          f"runs (yours would be ignored); rename yours, e.g. task/{other}.yaml, and run task={other}")
+
+
 def task_schemas(args: list[str], config_name: str) -> list[type]:
     """The schemas of the tasks a command line runs (resolved through their YAMLs' ``_target_``): a class that
-    does not import or breaks the protocol is a ConfigError (one line) here, before Hydra runs. A task without a
-    YAML is left to the choices check."""
+    does not import or breaks the protocol, or a user's YAML named like a built-in task, is a ConfigError (one
+    line) here, before Hydra runs. A task without a YAML is left to the choices check."""
     out = []
     for name in task_names(args, config_name):
+        check_not_builtin(name, args)
         target = yaml_target(name, args)
         if target is not None:
             out.append(schema_of(target))
