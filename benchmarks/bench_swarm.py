@@ -56,7 +56,7 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
     """One point, in this process: {'seconds': per step (eval) or per 200-step rollout (train), ...}."""
     import torch
 
-    from neurosym_cli.policy.comm import CommContext
+    from neurosym_cli.policy.comm import CommBase, CommContext
     from neurosym_cli.rollout import rollout
     from neurosym_cli.tasks.base import Rng
 
@@ -94,7 +94,7 @@ def one(baseline: str, n: int, mode: str, steps: int, batch: int) -> dict:
                 # everything but the scan: the same steps under the picks computed once (a fixed rule)
                 fixed = [comm.picks(ctx, 0)]
 
-                class Fixed:
+                class Fixed(CommBase):
                     name = "fixed"
 
                     def select(self, ctx, logits, r):

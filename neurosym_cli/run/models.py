@@ -39,17 +39,14 @@ def check_memory(cfg: RunConfig, task, comm: CommProvider, training: bool) -> No
     """Refuse, in one line with the estimate and the largest team that fits, a run whose largest episode cannot fit
     in the memory available (policy/footprint.py), before anything is allocated. Evaluation batches every test
     episode of every seed with the same N; training ``budget.batch_rollouts`` episodes over the horizon."""
-    from ..policy.comm import picks_first
     from ..policy.footprint import require_fits
 
-    n = getattr(cfg.task, "max_agents", None)
-    if n is None:
-        return
+    n = cfg.task.max_agents
     per_seed = len(cfg.task.test_settings) or cfg.task.eval_episodes
     batch = cfg.budget.batch_rollouts if training else per_seed * cfg.budget.eval_seeds
     what = f"{cfg.baseline.name} {'training' if training else 'evaluation'}"
     require_fits(what, n, batch=batch, horizon=cfg.horizon, rounds=task.rounds, model=cfg.model, k=cfg.rules,
-                 dense=not picks_first(comm), training=training, sparse_from=getattr(cfg.task, "sparse_from", 1 << 62))
+                 dense=not comm.picks_first, training=training, sparse_from=getattr(cfg.task, "sparse_from", 1 << 62))
 
 
 def load_gate(comm: CommProvider, payload: dict, path, made_by: str) -> None:

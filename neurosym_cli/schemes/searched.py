@@ -151,12 +151,16 @@ class Program(Searched):
         return ProgramComm(program, fmap)
 
     def rules(self, cfg: "RunConfig", comm: Any) -> int:
-        return comm.program.max_rules  # the file's K (program= is any file; a search may simplify rules away)
+        from ..policy.protocol import unwrap
+
+        return unwrap(comm).program.max_rules  # the file's K (program= is any file; a search may drop rules)
 
     def artifact_identity(self, cfg: "RunConfig", comm: Any, *, artifact: Path | None = None) -> str:
         from ..dsl.printer import to_text
 
-        return hashlib.sha1(to_text(comm.program).encode()).hexdigest()  # the rules, comments aside
+        from ..policy.protocol import unwrap
+
+        return hashlib.sha1(to_text(unwrap(comm).program).encode()).hexdigest()  # the rules, comments aside
 
 
 @dataclass

@@ -9,6 +9,7 @@ from ..baselines import run_args
 from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
+from ..policy.protocol import unwrap
 from ..tasks import make_task
 from ..utils.console import log, say
 from ..utils.io import ArtifactError
@@ -139,7 +140,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     if prog:
         prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
         label, rec = prog[0]
-        comm = baseline_comm(prog_cfg, task)
+        comm = unwrap(baseline_comm(prog_cfg, task))  # the program under any link failure
         program = comm.program  # type: ignore[attr-defined]
         agent = min(cfg.render.agent, rec.n_agents - 1)
         for r in range(program.n_rounds):

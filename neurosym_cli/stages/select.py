@@ -70,9 +70,9 @@ def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 # ------------------------------------------------------------------------------------------------- the grid
 def grid(cfg: RunConfig) -> list[RunConfig]:
     """One prog config per grid point (select.lam x select.rules x select.features), in that order."""
-    out, n = [], getattr(cfg.task, "max_agents", None)
+    out, n = [], cfg.task.max_agents
     for k in cfg.select.rules:
-        if n is not None and k >= n:
+        if k >= n:
             raise ConfigError(f"select.rules has K={k}, but an agent of {cfg.task.name} has at most {n - 1} others")
         for lam in cfg.select.lam:
             for f in cfg.select.features:
