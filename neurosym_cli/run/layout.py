@@ -148,10 +148,6 @@ class RunDir:
         """eval/<label>/, the baseline's label by default."""
         return self.eval_root / (label or self.label)
 
-    def metrics_files(self) -> list[Path]:
-        """metrics.json of every evaluated baseline, sorted."""
-        return sorted(self.eval_root.glob(f"*/{METRICS}"))
-
     # ------------------------------------------------------------------------------------------ pictures, logs
     @property
     def render_dir(self) -> Path:
@@ -166,3 +162,14 @@ class RunDir:
     def tensorboard_dir(self, run: str) -> Path:
         """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
         return self.root / "tensorboard" / run
+
+
+def metrics_files(exp_dir: Path) -> list[Path]:
+    """metrics.json of every baseline evaluated in the run directory ``exp_dir``, sorted."""
+    return sorted((Path(exp_dir) / EVAL).glob(f"*/{METRICS}"))
+
+
+def history_files(root: Path) -> list[Path]:
+    """history.csv of every model trained under ``root``: a runs folder of seed directories, or one run directory."""
+    return (sorted(Path(root).glob(f"seed*/{TRAIN}/*/{HISTORY}"))
+            or sorted(Path(root).glob(f"{TRAIN}/*/{HISTORY}")))

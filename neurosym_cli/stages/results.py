@@ -11,7 +11,8 @@ from ..config import RunConfig
 from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
-from ..run import pipeline_command
+from ..run import RunDir, pipeline_command
+from ..run.layout import history_files, metrics_files
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -59,7 +60,7 @@ def _eval_interval(m: dict) -> dict:
 def collect(exp_dir: Path, remake: str = "neurosym pipeline") -> Rows:
     """Every baseline evaluated in an experiment directory, in the paper's order (summaries over its evaluation
     seeds: mean, std, ci95 = the 95 % t half-width); ``remake``: the command that evaluates them again."""
-    found = [_metrics(f, remake) for f in sorted((Path(exp_dir) / "eval").glob("*/metrics.json"))]
+    found = [_metrics(f, remake) for f in metrics_files(exp_dir)]
     found.sort(key=lambda m: (schemes.rank(m["baseline"]), m["label"]))
     return [(m["label"], _eval_interval(m)) for m in found]
 
@@ -69,7 +70,7 @@ def histories(root: Path) -> list[tuple[str, str, bool, list[list[tuple[float, f
     baseline, whether it is a retraining, and one [(rollouts, loss)] per training seed, in the paper's order."""
     import csv
 
-    files = sorted(root.glob("seed*/train/*/history.csv")) or sorted(root.glob("train/*/history.csv"))
+    files = history_files(root)
     runs: dict[str, list[list[tuple[float, float]]]] = {}
     for f in files:
         try:
@@ -129,9 +130,9 @@ def write_figure(cfg: RunConfig) -> Path:
     """Figure-2-style PNG of every baseline evaluated in this experiment directory (and the training curves of
     its models beside it, curves.png)."""
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
-                 "training curves", Path(cfg.exp_dir) / "eval" / "curves.png")
+                 "training curves", RunDir(cfg).eval_root / "curves.png")
     return figure2(collect(Path(cfg.exp_dir), pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
-                   Path(cfg.exp_dir) / "eval" / "figure2.png", err="ci95")
+                   RunDir(cfg).eval_root / "figure2.png", err="ci95")
 
 
 def print_table(cfg: RunConfig) -> None:
