@@ -169,6 +169,11 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             if not run.manifest_file.exists():  # the run ended before its manifest (a full disk): made now
                 _manifest(cfg, info, out, verb, spec, state, 0.0, 0, device)
             return {"checkpoint": str(ckpt), "steps": state.step}
+        kernels = payload["config"].get("cpu_kernels")
+        if kernels is not None and kernels != cfg.cpu_kernels:  # steps of two kernel sets: a run neither would make
+            raise ConfigError(f"{ckpt} was trained for {state.step} steps under cpu_kernels={kernels}, this run has "
+                              f"cpu_kernels={cfg.cpu_kernels}: resume it with cpu_kernels={kernels}, or pass "
+                              "overwrite=true to train it from the start under this one")
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
     else:
