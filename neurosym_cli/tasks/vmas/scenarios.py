@@ -48,13 +48,49 @@ def scenario_of(spec: str) -> Any:
 def make_env(spec: str, n: int, b: int, device: Any, size_kwarg: str, kwargs: dict[str, Any]) -> Any:
     """A differentiable VMAS environment of scenario ``spec`` with ``n`` agents (keyword ``size_kwarg``) and ``b``
     parallel episodes; the scenario's own refusals (a bad keyword, an impossible size) become one line."""
+    import warnings
+
     vmas = require_vmas()
     kw = {**kwargs, size_kwarg: n}
+    scenario = scenario_of(spec)
     try:
-        return vmas.make_env(scenario_of(spec), num_envs=b, device=device, continuous_actions=True,
-                             grad_enabled=True, seed=0, **kw)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            env = vmas.make_env(scenario, num_envs=b, device=device, continuous_actions=True,
+                                grad_enabled=True, seed=0, **kw)
     except ConfigError:
         raise
     except Exception as e:  # noqa: BLE001 (whatever the scenario raises is reported, never a traceback)
         raise ConfigError(f"task.scenario={spec!r} with {kw}: VMAS refused "
                           f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})") from None
+    for w in caught:
+        if "not used by the scenario" in str(w.message):  # VMAS only warns, and trains without them
+            raise ConfigError(unused_kwargs(spec, scenario, kwargs))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)  # anything else, as VMAS said it
+    return env
+
+
+def scenario_keywords(scenario: Any) -> list[str]:
+    """The make_world keywords a scenario reads (``kwargs.pop("x", ...)`` / ``kwargs.get("x", ...)`` in its
+    source: VMAS scenarios take ``**kwargs``, so the signature names none); [] when its source is not readable."""
+    import inspect
+    import re
+
+    try:
+        src = inspect.getsource(type(scenario).make_world)
+    except (OSError, TypeError):
+        return []
+    return sorted(set(re.findall(r"kwargs\.(?:pop|get)\(\s*[\"'](\w+)[\"']", src)))
+
+
+def unused_kwargs(spec: str, scenario: Any, kwargs: dict[str, Any]) -> str:
+    """One line naming the task.scenario_kwargs a scenario does not read, with the nearest it does."""
+    import difflib
+
+    known = scenario_keywords(scenario)
+    bad = [k for k in kwargs if k not in known] if known else sorted(kwargs)
+    near = {k: difflib.get_close_matches(k, known, n=1, cutoff=0.6) for k in bad}
+    hints = "; ".join(f"did you mean {near[k][0]!r} for {k!r}?" for k in bad if near[k])
+    return (f"task.scenario_kwargs: VMAS scenario {spec!r} does not use {', '.join(map(repr, bad))} (it would train "
+            f"without {'it' if len(bad) == 1 else 'them'})" + (f"; {hints}" if hints else "")
+            + (f"; it reads: {', '.join(known)}" if known else ""))

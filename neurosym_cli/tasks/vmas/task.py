@@ -70,6 +70,10 @@ class VmasConfig(TaskConfig):
         bad = [v for v in self.vectors if v not in VECTORS]
         check(not bad, f"task.vectors: unknown {', '.join(bad)}; choose from {', '.join(VECTORS)}")
         check(self.noise_std >= 0 and self.vel_noise_std >= 0, "task.noise_std and vel_noise_std must be >= 0")
+        check(self.size_kwarg not in self.scenario_kwargs,
+              f"task.scenario_kwargs.{self.size_kwarg} would be replaced: neurosym passes the team size as "
+              f"{self.size_kwarg} from task.agents_per_group (or task.team_sizes); set "
+              f"task.agents_per_group={self.scenario_kwargs.get(self.size_kwarg)!s} instead")
 
     @property
     def sizes(self) -> list[int]:
