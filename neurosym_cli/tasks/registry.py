@@ -165,8 +165,9 @@ def make_task(cfg: TaskConfig, horizon: int | None = None) -> Any:
 
 def probe(task: Any, name: str, *, max_agents: int | None = None) -> None:
     """Reset two episodes, observe them and step them once with a zero action: wrong shapes, and a cost that is not
-    finite, are one line naming the method, before any training starts. ``max_agents``: the config's N of the largest episode (``TaskConfig.max_agents``), which the
-    memory and K < N checks trust; an episode with more agents is one line saying what to add."""
+    finite, are one line naming the method, before any training starts. ``max_agents``: the config's N of the
+    largest episode (``TaskConfig.max_agents``), which the memory and K < N checks trust; an episode with more
+    agents is one line saying what to add."""
     import torch
 
     from .base import Rng, TaskState
