@@ -48,7 +48,7 @@ def main() -> None:
     torch.manual_seed(0)
     policy = CommTransformer.for_task(env, cfg.model)  # untrained: see above
     comm = ProgramComm(program, env.features(cfg.features))
-    names = list(getattr(cfg.task, "test_settings", []) or [])
+    names = list(cfg.task.test_settings)
     for k in a.episodes:
         state, gen, seed = protocol_episode(env, k)
         rec = record_episode(env, policy, comm, state, gen, torch.device("cpu"), horizon=1)

@@ -93,7 +93,7 @@ def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, 
 def _setting_episodes(cfg: RunConfig) -> tuple[int, int] | None:
     """(the test episode of eval seed 0 with the most groups, one with a single group), by the task's named test
     settings ("0-1-2-3", "0"); None for tasks without them."""
-    names = list(getattr(cfg.task, "test_settings", []) or [])
+    names = list(cfg.task.test_settings)
     if not names:
         return None
     most = max(range(len(names)), key=lambda k: names[k].count("-"))

@@ -73,7 +73,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         label = RunDir(b).label
         done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:
-            n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents  # type: ignore[attr-defined]
+            n_total = dataclasses.replace(cfg.task, agents_per_group=n).max_agents
             try:
                 r = done[(n, f)] if (n, f) in done else stress_point(b, n, f)
                 done[(n, f)] = r
@@ -127,7 +127,7 @@ def print_stress(results: list[dict], cfg: RunConfig, stops: dict[str, dict] | N
             if axis == "failure":
                 t.add_column(f"{k:g}", justify="right")
                 continue
-            n_max = dataclasses.replace(cfg.task, agents_per_group=k).max_agents  # type: ignore[attr-defined]
+            n_max = dataclasses.replace(cfg.task, agents_per_group=k).max_agents
             t.add_column(f"{k} (N ≤ {n_max})", justify="right")
         for label in dict.fromkeys(r["label"] for r in rows):
             cells = []
