@@ -125,6 +125,8 @@ def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: 
     may set, with its declared type (a key it does not know may be a text)."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
+    from .overrides import number_hint
+
     parser = OverridesParser.create()
     for a in args:
         if a.startswith("-") or a in flag_values or "=" not in a:
@@ -134,6 +136,9 @@ def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: 
         try:
             o = parser.parse_override(a)
         except Exception:
+            hint = number_hint(key.lstrip("+~"), value, keys)  # a number in other digits: how to write it
+            if hint:
+                return f"{cut(a)}: {hint}"
             quoted = hydra_quoted(key.lstrip("+~"), value) if text else None
             lists = "; a list is [a,b] with its brackets closed" if value.startswith("[") else ""
             fix = f"; for the text itself quote it: {quoted}" if quoted else ""
@@ -142,6 +147,9 @@ def check_grammar(args: list[str], flag_values: set[str], multirun: bool, keys: 
         if o.is_sweep_override() and not multirun:
             if "," not in value:
                 return f"{a}: {value} is a sweep; add -m to run one job per value"
+            hint = number_hint(key.lstrip("+~"), value, keys)  # lam=0,5: a decimal comma
+            if hint:
+                return f"{cut(a)}: {hint}; a comma makes a sweep (add -m)"
             quoted = hydra_quoted(key.lstrip("+~"), value) if text else None
             return (f"{a}: a comma makes a sweep (add -m) or, in brackets, a list ({key}=[...])"
                     + (f"; for a value with a comma in it quote it: {quoted}" if quoted else ""))

@@ -15,6 +15,19 @@ class ConfigError(UserError, ValueError):
     """A configuration value is out of range; the message names the key and the fix."""
 
 
+EXIT_CONFIG = 2
+"""the exit status of bad configuration (a value out of range, a key or grid that cannot run), wherever it is
+found: before Hydra (the console script's checks), in a schema, or in a stage (docs/extending.md: `ConfigError`)"""
+EXIT_FAILED = 1
+"""the exit status of every other failure: a missing or corrupt artifact, a full disk, a failed sweep job"""
+
+
+def exit_status(e: BaseException) -> int:
+    """The exit status of a command that stopped on ``e``: ``EXIT_CONFIG`` for a configuration error, else
+    ``EXIT_FAILED`` (so that `rules=0` exits as `rules=abc` does)."""
+    return EXIT_CONFIG if isinstance(e, ConfigError) else EXIT_FAILED
+
+
 def check(ok: bool, msg: str) -> None:
     """Raise ConfigError(msg) unless ``ok`` (the range checks of every schema's ``__post_init__``)."""
     if not ok:

@@ -8,6 +8,7 @@ import dataclasses
 import difflib
 import os
 import re
+import unicodedata
 
 from .config import RunConfig, TaskConfig
 from .errors import cut
@@ -21,7 +22,7 @@ _SECTIONS = tuple(_SCHEMAS)
 _GROUPS = ("task", "baseline", "budget")  # config groups: key=<option name>
 _FUNCS = ("range(", "choice(", "glob(", "interval(", "shuffle(", "sort(", "tag(", "str(", "int(", "float(", "bool(")
 _INT = re.compile(r"[+-]?[0-9][0-9_]*")
-_BOOL = {"true", "false", "yes", "no", "on", "off", "1", "0"}
+_BOOL = {"true", "false"}  # only these: yes, on and 1 would pass for true here and nowhere else (issue 38)
 
 
 def _fields(cls) -> dict[str, str]:
@@ -77,6 +78,62 @@ def _type_error(value: str, typ: str) -> str | None:
     return None
 
 
+_DECIMAL_COMMA = re.compile(r"[+-]?[0-9]+,[0-9]+")
+
+
+def _ascii_number(text: str, kind: str) -> str | None:
+    """``text``, a number of ``kind`` (int or float) written with other scripts' digits, fullwidth forms
+    (``０.５``), a vulgar fraction (``½``, ``1½``) or a decimal comma (``0,5``), in the ASCII a config reads; None
+    when it is no such number."""
+    text = text.strip()
+    last = text[-1:]
+    frac = unicodedata.numeric(last, None) if last and not last.isascii() else None
+    if frac is not None and frac % 1:  # a vulgar fraction, after an optional whole part
+        whole = _ascii_number(text[:-1], "int") if text[:-1] else "0"
+        if whole is None or kind == "int":
+            return None
+        return f"{'-' if whole.startswith('-') else ''}{abs(int(whole)) + frac:g}"
+    out = []
+    for ch in unicodedata.normalize("NFKC", text):  # fullwidth and other compatibility forms
+        digit = unicodedata.decimal(ch, None)
+        out.append(ch if ch.isascii() else str(digit) if digit is not None else "-" if ch in "\u2212\u2013"
+                   else "." if ch == "\u066b" else "?")  # the minus signs; the Arabic decimal separator
+    word = "".join(out)
+    if kind == "float" and _DECIMAL_COMMA.fullmatch(word):
+        word = word.replace(",", ".")
+    if kind == "int":
+        return word if _INT.fullmatch(word) else None
+    try:
+        float(word)
+    except ValueError:
+        return None
+    return word if word.isascii() and word.lower().lstrip("+-") not in ("inf", "nan", "infinity") else None
+
+
+def number_hint(key: str, value: str, keys: dict[str, str]) -> str | None:
+    """How to write a number the config reads, when ``value`` of the numeric key ``key`` (an int or float, or a
+    list of them) is written with characters other than ASCII digits and a point (``lam=０.５``, ``lam=½``,
+    ``lam=0,5``): one line naming the key and, where it can be read, the ASCII form; else None."""
+    typ = keys.get(key, "")
+    typ = typ.removeprefix("Optional[").removesuffix("]") if typ.startswith("Optional[") else typ
+    listed = typ.startswith("list[") and value.startswith("[") and value.endswith("]")
+    kind = typ[5:-1] if listed else typ
+    if kind not in ("int", "float"):
+        return None
+    value = _unquote(value)
+    parts = [p.strip() for p in value[1:-1].split(",")] if listed else [value]
+    decimal_comma = not listed and kind == "float" and _DECIMAL_COMMA.fullmatch(value) is not None
+    if all(p.isascii() for p in parts) and not decimal_comma:
+        return None
+    fixed = [_ascii_number(p, kind) for p in parts]
+    fix = None if None in fixed else f"[{','.join(fixed)}]" if listed else fixed[0]  # type: ignore[arg-type]
+    what = ("integers" if kind == "int" else "numbers") if listed else _KINDS[kind]
+    how = "ASCII digits" + ("" if kind == "int" else " and '.' for the decimal point")
+    return (f"{key} takes {'a list of ' if listed else ''}{what} written in {how}, not {cut(repr(value))}"
+            + (f"; write {key}={fix}" if fix else f"; e.g. {key}={'[1,2]' if listed else 1}"
+               if kind == "int" else f"; e.g. {key}={'[0.3,0.5]' if listed else 0.5}"))
+
+
 _INTERPOLATION = re.compile(r"\$\{([^${}]*)\}")  # the innermost ${...} of a value
 _INT64 = 2**63
 
@@ -124,6 +181,9 @@ def check(args: list[str], task_schemas: list[type] | None = None) -> str | None
         why = _interpolation_problem(value, keys)
         if why:
             return f"{cut(a)}: {why}"
+        hint = number_hint(key, value, keys)
+        if hint:
+            return f"{cut(a)}: {hint}"
         if not all(ch.isascii() for ch in value) and not value.startswith(("'", '"')):
             return (f"{cut(a)}: Hydra reads non-ASCII characters only in quotes; write it as \"{key}='{cut(value)}'\" "
                     f"(the double quotes are for the shell)")

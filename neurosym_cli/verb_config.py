@@ -11,6 +11,20 @@ from typing import Optional
 from .errors import check as _check, check_finite
 
 
+def _word(value: object) -> str:
+    """A grid value as the names of its run directories write it (``lam0.3``, ``rl-c0.1``: floats by ``:g``)."""
+    return str(value).lower() if isinstance(value, bool) else f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def check_once_each(values: list, key: str) -> None:
+    """Refuse a grid that lists a value twice (as its directories name it: 0.3 and 0.30000001 are both lam0.3):
+    its two jobs would write one run directory at once, and the second stop on the first's lock."""
+    words = [_word(v) for v in values]
+    twice = next((w for i, w in enumerate(words) if w in words[:i]), None)
+    _check(twice is None, f"{key} lists {twice} twice; list each value of the grid once "
+                          f"({key}=[{','.join(dict.fromkeys(words))}])")
+
+
 @dataclass
 class RenderConfig:
     """`neurosym render` (an episode as an animation and a picture) and `neurosym figures` (the paper's figures)."""
@@ -78,6 +92,8 @@ class SelectConfig:
         _check(bool(self.rules) and all(k > 0 for k in self.rules), "select.rules must be a non-empty list of K > 0")
         _check(bool(self.features) and all(f in ("v1", "v2") for f in self.features),
                "select.features must be a non-empty list of v1, v2")
+        for key in ("lam", "rules", "features"):
+            check_once_each(getattr(self, key), f"select.{key}")
         _check(self.finalists >= 1, f"select.finalists must be at least 1, got {self.finalists}")
         _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
 
@@ -178,4 +194,6 @@ class RLConfig:
         _check(self.lr_scale > 0, f"rl.lr_scale must be positive, got {self.lr_scale}")
         _check(bool(self.grid_cost and self.grid_shaped and self.grid_init),
                "rl.grid_cost, rl.grid_shaped and rl.grid_init must be non-empty")
+        for key in ("grid_cost", "grid_shaped", "grid_init"):
+            check_once_each(getattr(self, key), f"rl.{key}")
         _check(self.jobs >= 0, f"rl.jobs must be non-negative, got {self.jobs}")

@@ -77,7 +77,7 @@ def test_link_failure_runs_live_apart_and_train_with_failures(tmp_path):
     assert (tmp_path / "random-grid-fail0.5/tiny/seed0/train/oracle/model.pt").exists(), p.stdout
     assert not (tmp_path / "random-grid").exists()
     p = run(["train", "task=random-grid", "task.link_failure=1.0"], tmp_path, check=False)
-    assert p.returncode == 1 and "task.link_failure must lie in [0, 1)" in p.stderr
+    assert p.returncode == 2 and "task.link_failure must lie in [0, 1)" in p.stderr  # a config error (errors.EXIT_CONFIG)
 
 
 def test_stress_command_on_a_tiny_run(tmp_path):

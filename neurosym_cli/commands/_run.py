@@ -12,7 +12,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from ..config import RunConfig, UserError
-from ..errors import cut_words, resource_problem
+from ..errors import ConfigError, cut_words, exit_status, resource_problem
 from ..stages import RunInfo
 
 
@@ -89,7 +89,7 @@ def typed_config(cfg: DictConfig) -> RunConfig:
     try:
         return OmegaConf.to_object(cfg)  # type: ignore[return-value]
     except OmegaConfBaseException as e:
-        raise UserError(str(e).splitlines()[0]) from None
+        raise ConfigError(str(e).splitlines()[0]) from None  # a value of the wrong type: bad configuration
 
 
 def _wrote_since(exp_dir: Path, logs: Path, started: float) -> bool:
@@ -203,7 +203,7 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
             raise
         if not sweep:
             _drop_log_dir(Path(hc.runtime.output_dir), cfg, started)
-            _error(name, msg)
+            _error(name, msg, exit_status(e))
         from ..utils.console import say
         from ..utils.io import write_json
 

@@ -15,7 +15,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from ..config import RunConfig
-from ..errors import cut_words, name_problem, resource_problem
+from ..errors import EXIT_CONFIG, EXIT_FAILED, cut_words, name_problem, resource_problem
 from ..schemes import SCHEMES, default_baselines
 from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
@@ -76,9 +76,9 @@ def hydra_problem(e: Exception) -> str | None:
 
 
 def _one_line(name: str, app):
-    """The app with Hydra's own failures as one line and exit 1, as run_command does for the command's: Hydra
-    raises them (HYDRA_FULL_ERROR) instead of printing a cut traceback; a user who set HYDRA_FULL_ERROR gets them
-    whole, as Hydra documents."""
+    """The app with Hydra's own failures as one line and exit 2 (a disk or memory problem: 1), as run_command does
+    for the command's: Hydra raises them (HYDRA_FULL_ERROR) instead of printing a cut traceback; a user who set
+    HYDRA_FULL_ERROR gets them whole, as Hydra documents."""
     def run() -> object:
         if os.environ.get("HYDRA_FULL_ERROR"):
             return app()
@@ -90,7 +90,7 @@ def _one_line(name: str, app):
             if msg is None:
                 raise
             print(f"neurosym {name.replace('_', '-')}: error: {cut_words(msg)}", file=sys.stderr)
-            raise SystemExit(1) from None
+            raise SystemExit(EXIT_FAILED if resource_problem(e) else EXIT_CONFIG) from None  # Hydra's: the config's
         finally:
             os.environ.pop("HYDRA_FULL_ERROR", None)
 
