@@ -104,12 +104,13 @@ def main() -> None:
             with open(a.replot) as fh:
                 data = json.load(fh)
         else:
-            from pathlib import Path
+            from neurosym_cli.run.layout import ORACLE_DIR, RunFolder
 
-            exp = Path(a.curves)
-            data = {"task": a.task, "curves": {"oracle (BPTT, full attention)": read_curve(str(exp / "train/oracle/history.csv"))}}
-            for d in sorted(exp.glob("train/rl-*-scratch")):
-                data["curves"][f"{d.name} (rl from scratch)"] = read_curve(str(d / "history.csv"))
+            exp = RunFolder(a.curves)
+            data = {"task": a.task, "curves": {"oracle (BPTT, full attention)":
+                                               read_curve(str(exp.history_of(ORACLE_DIR)))}}
+            for d in sorted(exp.trained_dir("").glob("rl-*-scratch")):
+                data["curves"][f"{d.name} (rl from scratch)"] = read_curve(str(exp.history_of(d.name)))
             if a.json:
                 with open(a.json, "w") as fh:
                     json.dump(data, fh)

@@ -37,6 +37,7 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     from neurosym_cli.tasks import make_task
     from neurosym_cli.synth.dataset import FORMAT, from_payload, subsample
     from neurosym_cli.synth.mcmc import metropolis
+    from neurosym_cli.run.layout import MODEL, ORACLE_DIR, RunFolder
     from neurosym_cli.synth.objective import CachedScorer
     from neurosym_cli.synth.search import feature_quantiles
 
@@ -45,10 +46,10 @@ def one(exp: str, schedule: str, rules: int, lam: float, features: str, seed: in
     cfg = compose_config("synth", [f"task={task}"])
     sch = SCHEDULES[schedule]
     t0 = time.perf_counter()
-    payload = checkpoints.load_checkpoint(Path(exp) / "train/oracle/model.pt", "neurosym train")
+    payload = checkpoints.load_checkpoint(RunFolder(exp).trained_dir(ORACLE_DIR) / MODEL, "neurosym train")
     policy = checkpoints.policy_from_payload(payload).eval()
     env = make_task(cfg.task)
-    data_file = sorted(Path(exp, "synth").glob("dataset-*.pt"))[0]
+    data_file = RunFolder(exp).datasets()[0]
     data = from_payload(checkpoints.load_payload(data_file, "neurosym synth", FORMAT, "dataset"))
     cpu = torch.device("cpu")
 

@@ -16,6 +16,8 @@ import json
 import sys
 from pathlib import Path
 
+from neurosym_cli.run.layout import METRICS, MODEL, PROGRAM, TREE
+
 
 def tensors_digest(obj) -> str:
     """SHA-1 over every tensor in a nested dict/list, in key order (values' bytes, dtype and shape)."""
@@ -46,16 +48,16 @@ def fingerprint(root: Path) -> dict[str, str]:
         rel = str(f.relative_to(root))
         if "/logs/" in f"/{rel}" or not f.is_file():
             continue
-        if f.name == "model.pt":
+        if f.name == MODEL:
             p = torch.load(f, map_location="cpu", weights_only=True)
             out[rel] = tensors_digest({"state_dict": p["state_dict"], "comm_state": p.get("comm_state", {})})
         elif f.suffix == ".pt" and f.name.startswith("dataset-"):
             out[rel] = tensors_digest(torch.load(f, map_location="cpu", weights_only=True))
-        elif f.name == "program.txt":
+        elif f.name == PROGRAM:
             out[rel] = f.read_text()
-        elif f.name == "tree.json":
+        elif f.name == TREE:
             out[rel] = json.dumps(json.loads(f.read_text()).get("rounds"), sort_keys=True)
-        elif f.name == "metrics.json":
+        elif f.name == METRICS:
             out[rel] = json.dumps(json.loads(f.read_text())["per_seed"], sort_keys=True)
     return out
 

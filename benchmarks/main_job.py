@@ -21,6 +21,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from neurosym_cli.run.layout import RunFolder
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "results" / "main-job"
 TASK, BUDGET = "two-groups-cross", "quick"
@@ -30,13 +32,14 @@ QUOTED = ("tf-full", "prog-retrained", "det-prog-retrained", "hard-attn", "dist"
 def seed_record(exp: Path) -> dict:
     """One training seed's run directory -> its baselines' summaries, programs and stage timings."""
     baselines = {}
-    for f in sorted(exp.glob("eval/*/metrics.json")):
+    run = RunFolder(exp)
+    for f in run.metrics_files():
         m = json.loads(f.read_text())
         baselines[m["label"]] = {k: {x: round(v[x], 5) if isinstance(v[x], float) else v[x]
                                      for x in ("mean", "std", "ci95", "n")} for k, v in m["summary"].items()}
     programs = {p.parent.name: [line for line in p.read_text().splitlines() if line and not line.startswith("#")]
-                for p in sorted(exp.glob("synth/*/program.txt"))}
-    timings = exp / "pipeline_timings.json"
+                for p in run.programs()}
+    timings = run.timings_file
     return {"baselines": baselines, "programs": programs,
             "timings": json.loads(timings.read_text()) if timings.exists() else {}}
 

@@ -51,7 +51,7 @@ from benchmarks.results.collect import (collect, collect_noisy, collect_rl, coll
                                         collect_stress, collect_vmas)
 from benchmarks.results.figures import (draw_figures, draw_pareto, draw_seed_figures, draw_stress,  # noqa: E402
                                         draw_vmas)
-from benchmarks.results.files import DOCS, METRICS, SEEDS, TEMPLATE, VARIANTS, load, load_seeds  # noqa: E402,F401
+from benchmarks.results.files import DOCS, FIGURES, METRICS, SEEDS, TEMPLATE, VARIANTS, load, load_seeds  # noqa: E402,F401
 from benchmarks.results.render import render  # noqa: E402
 from benchmarks.results.tables import paired  # noqa: E402,F401
 
@@ -102,7 +102,7 @@ def main() -> None:
             draw_stress(task)
     by_task = load_seeds(Path(a.seeds))
     if a.seed_figures or a.figures:
-        draw_seed_figures(by_task, Path(a.seed_figures) if a.seed_figures else DOCS / "figures")
+        draw_seed_figures(by_task, Path(a.seed_figures) if a.seed_figures else FIGURES)
     text = render(TEMPLATE.read_text(), *load(), by_task)
     target = Path(a.out) if a.out and not a.check else DOCS / "results.md"
     if a.check:

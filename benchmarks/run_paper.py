@@ -29,6 +29,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from neurosym_cli.run.layout import RunFolder
 from neurosym_cli.schemes import SCHEMES as BASELINES
 from neurosym_cli.stages.graph import plan, requires
 
@@ -78,7 +79,7 @@ def build(tasks: list[str]) -> list[Job]:
     for task in tasks:
         col = TASKS.index(task) if task in TASKS else 0
         known = {}
-        timing = exp_dir(task) / "pipeline_timings.json"
+        timing = RunFolder(exp_dir(task)).timings_file
         if timing.exists():
             known = json.loads(timing.read_text())
         by_stage: dict[str, Job] = {}
@@ -96,7 +97,7 @@ def build(tasks: list[str]) -> list[Job]:
 def record(job: Job) -> None:
     """Write a finished stage's wall time to its task's pipeline_timings.json, unless the stage only found its
     artifact done (a few seconds), which keeps the time it took to make."""
-    path = exp_dir(job.task) / "pipeline_timings.json"
+    path = RunFolder(exp_dir(job.task)).timings_file
     timings = json.loads(path.read_text()) if path.exists() else {}
     if job.stage == "pipeline" or (job.seconds or 0.0) < 5 and job.stage in timings:
         return
@@ -115,8 +116,8 @@ FOLLOWUPS = {  # the two extra searches of docs/results.md, run after the protoc
 def run_followups(tasks: list[str], logs: Path) -> None:
     """Both follow-up pipelines at once (one thread each); the protocol's stage timings are kept as they were."""
     todo = [t for t in tasks if t in FOLLOWUPS]
-    saved = {t: (exp_dir(t) / "pipeline_timings.json").read_text() for t in todo
-             if (exp_dir(t) / "pipeline_timings.json").exists()}
+    saved = {t: RunFolder(exp_dir(t)).timings_file.read_text() for t in todo
+             if RunFolder(exp_dir(t)).timings_file.exists()}
     env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     procs, t0 = {}, time.time()
     for t in todo:
@@ -129,7 +130,7 @@ def run_followups(tasks: list[str], logs: Path) -> None:
         took[t] = {"seconds": round(time.time() - t0, 1), "exit": rc, "overrides": FOLLOWUPS[t]}
         print(f"follow-up {t} ({' '.join(FOLLOWUPS[t])}): exit {rc} after {took[t]['seconds'] / 60:.1f} min")
     for t, text in saved.items():
-        (exp_dir(t) / "pipeline_timings.json").write_text(text)
+        RunFolder(exp_dir(t)).timings_file.write_text(text)
     (logs / "followups.json").write_text(json.dumps(took, indent=2) + "\n")
 
 

@@ -36,6 +36,7 @@ import threading
 import time
 from pathlib import Path
 
+from neurosym_cli.run.layout import ORACLE_DIR, TRACE, RunFolder
 from neurosym_cli.schemes import SCHEMES
 from neurosym_cli.schemes.searched import Searched  # runs under a program or a tree
 from neurosym_cli.utils.cpu import PIN  # what the pinned modes set (the console script sets it in every job too)
@@ -60,11 +61,12 @@ def result_file(out: Path, task: str, seed: int) -> Path:
 
 def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict:
     """The small result file of one task-seed from its run directory (the pipeline's evaluations under the pick)."""
-    selected = json.loads((exp / "select" / "selected.json").read_text())
-    selection = json.loads((exp / "select" / "selection.json").read_text())
+    run = RunFolder(exp)
+    selected = json.loads(run.selected_file.read_text())
+    selection = json.loads(run.selection_file().read_text())
     pick = {k: selected[k] for k in ("rules", "lam", "features") if k in selected}
     baselines: dict[str, dict] = {}
-    for f in sorted(exp.glob("eval/*/metrics.json")):
+    for f in run.metrics_files():
         m = json.loads(f.read_text())
         c = m["config"]
         if c["rules"] != pick["rules"] or c.get("program"):
@@ -78,10 +80,10 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
             continue  # rl1/rl2 and other renamed rows
         baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
                                     "seconds": m["seconds"]}
-    programs = {p.parent.name: p.read_text().strip() for p in sorted(exp.glob("synth/*/program.txt"))
+    programs = {p.parent.name: p.read_text().strip() for p in run.programs()
                 if p.parent.name.endswith(f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}")
                 or f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}-" in p.parent.name}
-    timings = exp / "pipeline_timings.json"
+    timings = run.timings_file
     return {
         "task": task, "seed": seed, "budget": budget, "pick": pick, "selected": selected,
         "selection": [{k: r.get(k) for k in KEEP_SELECT} for r in selection["programs"]],
@@ -97,14 +99,14 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
 def machine(exp: Path) -> dict:
     """What the oracle of a run directory trained with (its manifest's runtime record): the cpu_kernels mode, MKL's
     path, the CPU's vendor and model, the torch version."""
-    rt = json.loads((exp / "train" / "oracle" / "manifest.json").read_text()).get("runtime") or {}
+    rt = json.loads(RunFolder(exp).manifest_of(ORACLE_DIR).read_text()).get("runtime") or {}
     return {k: rt.get(k) for k in ("cpu_kernels", "mkl_path", "cpu_vendor", "cpu", "torch")}
 
 
 STASH_MAX = 1 << 20
 """bytes: a stashed artifact is at most this big (datasets are remade from the oracle; traces and logs are not needed
 to resume)"""
-SKIP = ("logs", ".lock", "trace.csv")
+SKIP = ("logs", ".lock", TRACE)
 
 
 def stash_dir(out: Path, task: str, seed: int) -> Path:
@@ -251,7 +253,7 @@ def recollect(out: Path, runs: Path, task: str, seed: int, args) -> None:
     """A result file written again from its run directory by this ``collect`` (a fix in what it keeps), with the
     wall time and machine of the run that made it."""
     dest, exp = result_file(out, task, seed), runs / task / args.budget / f"seed{seed}"
-    if not (dest.exists() and (exp / "select" / "selected.json").exists()):
+    if not (dest.exists() and RunFolder(exp).selected_file.exists()):
         print(f"{task} seed {seed}: nothing to collect again (no result file or no run directory)", flush=True)
         return
     old = json.loads(dest.read_text())

@@ -5,7 +5,7 @@ from __future__ import annotations
 from neurosym_cli.dsl import parse
 
 from .figures import vmas_order
-from .files import DOCS, ORDER, RESULTS, read, with_selected
+from .files import DOCS, FIGURES, ORDER, RESULTS, read, with_selected
 from .tables import EVAL_PM, gap, mean, ms, paired, pm, readings, shown, verdict
 
 
@@ -146,14 +146,14 @@ def vmas(task: str) -> str:
         ci = lambda m: f"{sm[m]['mean']:.2f} ± {sm[m]['ci95']:.2f}"  # noqa: E731
         out.append(f"| {b[k]['label']} | {ci('cost')} | {ci('max_in')} | {ci('max_out')} | "
                    + " | ".join(f"{sm[e]['mean']:.3f}" for e in extra) + " |")
-    if (DOCS / "figures" / f"{name}.png").exists():
+    if (FIGURES / f"{name}.png").exists():
         out += ["", f"![{task}: loss vs max in+out](figures/{name}.png)"]
     text, program, said = shown(v["program"], task, "v1")
     out += ["", "The synthesized program (`neurosym show-program` prints it as evaluated):", "", "```", text, "```", "",
             *([*said, ""] if said else [])]
     out += readings(program, task, "v1")
     labels = {b[k]["label"]: k for k in b}
-    shots = [p for p in sorted((DOCS / "figures").glob(f"{name}-*-episode0.png"))
+    shots = [p for p in sorted(FIGURES.glob(f"{name}-*-episode0.png"))
              if p.name.removeprefix(f"{name}-").removesuffix("-episode0.png") in labels]
     if b["prog-retrained"]["summary"]["max_in"]["mean"] == 0:
         out += ["", "The program hears nobody, so an episode under prog-retrained has no edges to draw; the "

@@ -7,16 +7,18 @@ import json
 import sys
 from pathlib import Path
 
-from .files import DOCS, KEEP_SELECT, METRICS, RESULTS, TRAINING, VARIANTS, entry, has_program, write
+from neurosym_cli.run.layout import ORACLE_DIR, RunFolder
+
+from .files import FIGURES, KEEP_SELECT, METRICS, RESULTS, TRAINING, VARIANTS, entry, has_program, write
 
 
 def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
     """The artifacts of the paper protocol under ``root`` -> one small JSON file per variant, and run.json."""
     RESULTS.mkdir(parents=True, exist_ok=True)
     for name, (task, lam, objective) in VARIANTS.items():
-        exp = root / task / budget / f"seed{seed}"
+        exp = RunFolder(root / task / budget / f"seed{seed}")
         out: dict = {"task": task, "objective": objective, "baselines": {}, "programs": {}}
-        for f in sorted(exp.glob("eval/*/metrics.json")):
+        for f in exp.metrics_files():
             m = json.loads(f.read_text())
             c = m["config"]
             if has_program(m):
@@ -27,13 +29,13 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
             out["baselines"][m["baseline"]] = entry(m)
             out["seeds"] = m["seeds"]
         if "lam" not in out:
-            print(f"no program evaluations for {name} under {exp}; skipped", file=sys.stderr)
+            print(f"no program evaluations for {name} under {exp.root}; skipped", file=sys.stderr)
             continue
         suffix = f"-lam{out['lam']:g}-{out['features']}" + ("" if objective == "paper" else f"-{objective}")
-        for p in sorted(exp.glob("synth/*/program.txt")):
+        for p in exp.programs():
             if p.parent.name.endswith(suffix):
                 out["programs"][p.parent.name] = p.read_text().strip()
-        timing = exp / "pipeline_timings.json"
+        timing = exp.timings_file
         if name == task and timing.exists():
             out["timings"] = json.loads(timing.read_text())
         write(RESULTS / f"{name}.json", out)
@@ -52,7 +54,8 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
 
 def collect_select(exp: Path) -> None:
     """<exp>/select/selection.json (and the pick's test evaluations) -> docs/results/select-<task>.json."""
-    sel = json.loads((exp / "select" / "selection.json").read_text())
+    run = RunFolder(exp)
+    sel = json.loads(run.selection_file().read_text())
     keep = (*KEEP_SELECT, "search_seconds")
     out = {k: sel[k] for k in ("task", "name", "rules", "lam", "features", "synth", "val_seeds", "grid",
                                "finalists", "seconds", "jobs", "rule")}
@@ -60,10 +63,10 @@ def collect_select(exp: Path) -> None:
     out["retrained"] = [{k: r.get(k) for k in ("name", "loss", "degree", "max_in", "max_out")}
                         for r in sel["retrained"]]
     out["test"] = {}
-    for f in sorted(exp.glob(f"eval/*-{sel['name']}/metrics.json")):
+    for f in run.metrics_files(f"*-{sel['name']}"):
         m = json.loads(f.read_text())
         out["test"][m["baseline"]] = entry(m)
-    out["program"] = (exp / "synth" / sel["name"] / "program.txt").read_text().strip()
+    out["program"] = run.synthesized_as(sel["name"]).read_text().strip()
     path = RESULTS / f"select-{sel['task']}.json"
     write(path, out)
     print(f"wrote {path}")
@@ -71,7 +74,7 @@ def collect_select(exp: Path) -> None:
 
 def collect_stress(exp: Path) -> None:
     """<exp>/stress/stress.json -> docs/results/stress-<task>.json (without the config)."""
-    st = json.loads((exp / "stress" / "stress.json").read_text())
+    st = json.loads(RunFolder(exp).stress_file().read_text())
     cfg = st.pop("config")
     st.update(budget=cfg["budget"]["name"], seed=cfg["seed"], rules=cfg["rules"], lam=cfg["lam"],
               features=cfg["features"])
@@ -82,22 +85,23 @@ def collect_stress(exp: Path) -> None:
 
 def collect_rl(exp: Path) -> None:
     """<exp>/rl/grid.json, the picks' test evaluations and the training manifests -> docs/results/rl-<task>.json."""
-    grid = json.loads((exp / "rl" / "grid.json").read_text())
+    run = RunFolder(exp)
+    grid = json.loads(run.rl_grid_file().read_text())
     out = {k: grid[k] for k in ("task", "budget", "seed", "val_seeds", "rl1", "rl2", "rule", "settings", "seconds",
                                 "jobs")}
     out["test"] = {}
     for label in ("rl1", "rl2"):
-        m = json.loads((exp / "eval" / label / "metrics.json").read_text())
+        m = json.loads(run.metrics_of(label).read_text())
         out["test"][label] = entry({**m, "label": label}, setting=grid[label]["name"])
     out["extra"] = {}  # rl models evaluated outside the grid (a setting from scratch, too costly for the grid)
     names = {s["name"] for s in grid["settings"]}
-    for f in sorted(exp.glob("eval/rl-*/metrics.json")):
+    for f in run.metrics_files("rl-*"):
         m = json.loads(f.read_text())
         if m["label"] in names:
             continue
-        man = json.loads((exp / "train" / m["label"] / "manifest.json").read_text())
+        man = json.loads(run.manifest_of(m["label"]).read_text())
         out["extra"][m["label"]] = entry(m, training={k: man[k] for k in TRAINING})
-    oracle = json.loads((exp / "train" / "oracle" / "manifest.json").read_text())
+    oracle = json.loads(run.manifest_of(ORACLE_DIR).read_text())
     out["oracle_training"] = {k: oracle[k] for k in TRAINING}
     path = RESULTS / f"rl-{grid['task']}.json"
     write(path, out)
@@ -107,17 +111,18 @@ def collect_rl(exp: Path) -> None:
 def collect_noisy(exp: Path) -> None:
     """Appendix E: every test evaluation of a link-failure run directory (where `neurosym pipeline selected=true`
     ran) -> docs/results/<task>.json, the variant format, programs of the selected configuration only."""
-    sel = json.loads((exp / "select" / "selected.json").read_text())
+    run = RunFolder(exp)
+    sel = json.loads(run.selected_file.read_text())
     out: dict = {"task": sel["task"], "objective": "paper", "baselines": {}, "programs": {}, "rules": sel["rules"],
                  "lam": sel["lam"], "features": sel["features"]}
-    for f in sorted(exp.glob("eval/*/metrics.json")):
+    for f in run.metrics_files():
         m = json.loads(f.read_text())
         if has_program(m) and not m["label"].endswith("-" + sel["name"]):
             continue  # programs of other configurations
         out["baselines"][m["baseline"]] = entry(m)
         out["seeds"] = m["seeds"]
         out["link_failure"] = m["config"]["task"]["link_failure"]
-    out["programs"][sel["name"]] = (exp / "synth" / sel["name"] / "program.txt").read_text().strip()
+    out["programs"][sel["name"]] = run.synthesized_as(sel["name"]).read_text().strip()
     path = RESULTS / f"{sel['task']}.json"
     write(path, out)
     print(f"wrote {path}: {len(out['baselines'])} baselines")
@@ -134,8 +139,9 @@ def collect_vmas(exp: Path, wall: float | None = None) -> None:
     """A VMAS scenario's run directory (docs/vmas.md, 'Results') -> docs/results/vmas-<scenario>.json: every
     baseline's summary (mean, std, 95 % t half-width over the evaluation seeds) and per-seed losses, the program,
     each trained model's training (loss every 10 steps, seconds), the stage times and the measured wall time."""
+    run = RunFolder(exp)
     out: dict = {"baselines": {}, "training": {}}
-    for f in sorted(exp.glob("eval/*/metrics.json")):
+    for f in run.metrics_files():
         m = json.loads(f.read_text())
         c = m["config"]
         out.update(task=f"vmas/{c['task']['name'].removeprefix('vmas-')}", seeds=m["seeds"],
@@ -144,27 +150,26 @@ def collect_vmas(exp: Path, wall: float | None = None) -> None:
         out["baselines"][m["baseline"]] = entry(m, metrics=VMAS_METRICS, stats=("mean", "std", "ci95"),
                                                 optional=True)
         if has_program(m):
-            out["program"] = (exp / "synth" / m["label"].removeprefix(m["baseline"] + "-") / "program.txt"
-                              ).read_text().strip()
-    for f in sorted(exp.glob("train/*/manifest.json")):
+            out["program"] = run.synthesized_as(m["label"].removeprefix(m["baseline"] + "-")).read_text().strip()
+    for f in run.manifests():
         man = json.loads(f.read_text())
-        with open(f.parent / "history.csv") as h:
+        with open(run.history_of(f.parent.name)) as h:
             losses = [float(r["loss"]) for r in csv.DictReader(h)]
         out["training"][f.parent.name] = {
             "steps": len(losses), "rollouts": man["rollouts"], "seconds": round(man["seconds_this_run"], 1),
             "loss_every_10_steps": [round(sum(losses[i:i + 10]) / len(losses[i:i + 10]), 3)
                                     for i in range(0, len(losses), 10)]}
     out["command"] = VMAS_COMMAND.format(task=out["task"])
-    out["stage_seconds"] = json.loads((exp / "pipeline_timings.json").read_text())
+    out["stage_seconds"] = json.loads(run.timings_file.read_text())
     if wall is not None:
         out["wall_seconds"] = wall
     path = RESULTS / f"vmas-{out['task'].split('/')[-1]}.json"
     write(path, out)
     print(f"wrote {path}: {len(out['baselines'])} baselines")
     heard = {e["label"]: e["summary"]["max_in"]["mean"] for e in out["baselines"].values()}
-    for gif in sorted(exp.glob("render/*/episode0.gif")):  # what `neurosym render ... episode=0` drew
+    for gif in sorted(run.render_root.glob("*/episode0.gif")):  # what `neurosym render ... episode=0` drew
         if heard.get(gif.parent.name):  # an episode without edges says nothing about whom agents hear
-            vmas_episode_figures(gif, DOCS / "figures" / f"{path.stem}-{gif.parent.name}-episode0")
+            vmas_episode_figures(gif, FIGURES / f"{path.stem}-{gif.parent.name}-episode0")
 
 
 def vmas_episode_figures(gif: Path, stem: Path, frames: int = 4) -> None:

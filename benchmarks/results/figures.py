@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .files import DOCS, ORDER, RESULTS, VARIANTS, read
+from .files import FIGURES, ORDER, RESULTS, VARIANTS, read
 
 
 def vmas_order(b: dict) -> list[str]:
@@ -23,9 +23,9 @@ def draw_figures() -> None:
         r = read(task)
         rows = [(r["baselines"][b]["label"], r["baselines"][b]["summary"]) for b in ORDER if b in r["baselines"]]
         title = f"{task} (paper budget, train seed 0): mean ± std over {r['seeds']} eval seeds"
-        (DOCS / "figures").mkdir(exist_ok=True)
-        figure2(rows, title.replace(": ", ":\n"), DOCS / "figures" / f"{task}.png")
-        print(f"drew {DOCS / 'figures' / (task + '.png')}")
+        FIGURES.mkdir(exist_ok=True)
+        figure2(rows, title.replace(": ", ":\n"), FIGURES / f"{task}.png")
+        print(f"drew {FIGURES / (task + '.png')}")
 
 
 def _stress_cfg(st: dict):
@@ -42,8 +42,8 @@ def draw_stress(task: str) -> None:
 
     if (RESULTS / f"stress-{task}.json").exists():
         st = read(f"stress-{task}")
-        stress_plot(st["results"], _stress_cfg(st), DOCS / "figures" / f"{task}-stress.png")
-        print(f"drew {DOCS / 'figures' / (task + '-stress.png')}")
+        stress_plot(st["results"], _stress_cfg(st), FIGURES / f"{task}-stress.png")
+        print(f"drew {FIGURES / (task + '-stress.png')}")
 
 
 def draw_vmas() -> None:
@@ -57,8 +57,8 @@ def draw_vmas() -> None:
         rows = [(b[k]["label"], b[k]["summary"]) for k in vmas_order(b)]
         title = (f"{r['task']} ({r['budget']['name']} budget, train seed {r['training_seed']}): "
                  f"mean ± 95 % t interval over {r['seeds']} eval seeds")
-        figure2(rows, title.replace(": ", ":\n"), DOCS / "figures" / f"{f.stem}.png", err="ci95")
-        print(f"drew {DOCS / 'figures' / (f.stem + '.png')}")
+        figure2(rows, title.replace(": ", ":\n"), FIGURES / f"{f.stem}.png", err="ci95")
+        print(f"drew {FIGURES / (f.stem + '.png')}")
 
 
 def draw_pareto(task: str) -> None:
@@ -84,11 +84,11 @@ def draw_pareto(task: str) -> None:
                 f"{task} (paper budget, train seed 0): test loss against max in+out (lower left is better),\n"
                 "every baseline, the program chosen by `neurosym select`"
                 + (" and the rl picks of `neurosym rl`" if has_rl else ""),
-                DOCS / "figures" / f"{task}-pareto-selected.png")
-    print(f"drew {DOCS / 'figures' / (task + '-pareto-selected.png')}")
+                FIGURES / f"{task}-pareto-selected.png")
+    print(f"drew {FIGURES / (task + '-pareto-selected.png')}")
 
 
-def draw_seed_figures(by_task: dict, out_dir: Path = DOCS / "figures") -> None:
+def draw_seed_figures(by_task: dict, out_dir: Path = FIGURES) -> None:
     """seeds-<task>.png and seeds-profile.png from the seed files alone (neurosym_cli.seeds.draw)."""
     from neurosym_cli import seeds
 

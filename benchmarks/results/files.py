@@ -12,6 +12,8 @@ from neurosym_cli.seeds.read import METRICS  # noqa: F401  (the metrics a result
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "results"
+FIGURES = DOCS / "figures"
+"""the page's figures (docs/figures/)"""
 TEMPLATE = DOCS / "results.template.md"
 SEEDS = RESULTS / "seeds"
 ORDER = default_baselines()

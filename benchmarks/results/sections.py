@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from .claims import claims
-from .files import DOCS, FORMATION, ORDER, VARIANTS, read, with_selected
+from .files import FIGURES, FORMATION, ORDER, VARIANTS, read, with_selected
 from .tables import EVAL_PM, ms, readings, shown, verdict
 
 
@@ -26,7 +26,7 @@ def section(name: str, v: dict) -> str:
     for b in sorted(v["baselines"], key=lambda b: ORDER.index(b) if b in ORDER else len(ORDER)):
         out.append(f"| {b} | {ms(v, b, 'cost', digits)} | {ms(v, b, 'max_in')} | {ms(v, b, 'max_out')} | "
                    f"{ms(v, b, 'mean_degree')} |")
-    if name == task and (DOCS / "figures" / f"{task}.png").exists():
+    if name == task and (FIGURES / f"{task}.png").exists():
         out += ["", f"![{task}: loss vs max in-degree](figures/{task}.png)"]
     out += ["", "Synthesized programs, each rule with its reading (`neurosym show-program` prints the same):", ""]
     for tag, raw in sorted(v["programs"].items()):
@@ -120,7 +120,7 @@ def selection(task: str, variants: dict[str, dict]) -> str:
             continue
         change = "" if before.get(c.short) == c.holds else f" (with the default configuration: {verdict(before[c.short])})"
         out.append(f"- {c.long} -> {verdict(c.holds)}{change}")
-    if (DOCS / "figures" / f"{task}-pareto-selected.png").exists():
+    if (FIGURES / f"{task}-pareto-selected.png").exists():
         out += ["", f"![{task}: loss against max in+out, Pareto front](figures/{task}-pareto-selected.png)"]
     return "\n".join(out)
 
@@ -149,6 +149,6 @@ def stress(task: str) -> str:
         out.append("")
     if st.get("skipped"):
         out += ["Not stressed (not trained in that run directory): " + ", ".join(sorted(st["skipped"])) + ".", ""]
-    if (DOCS / "figures" / f"{task}-stress.png").exists():
+    if (FIGURES / f"{task}-stress.png").exists():
         out.append(f"![{task}: zero-shot stress](figures/{task}-stress.png)")
     return "\n".join(out).rstrip("\n")

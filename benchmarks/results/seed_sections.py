@@ -6,7 +6,7 @@ from __future__ import annotations
 from neurosym_cli.stats import mean_ci
 
 from .claims import Claim, claims
-from .files import DOCS, FORMATION, PLANNED_SEEDS, SEED_TASKS, seed_variant
+from .files import FIGURES, FORMATION, PLANNED_SEEDS, SEED_TASKS, seed_variant
 
 
 def seed_claims(task: str, runs: list) -> tuple[list[str], dict[int, list[Claim] | str]]:
@@ -120,7 +120,7 @@ def seeds_task(task: str, runs: list) -> str:
             one = next(x for x in cl if x.name == name)
             cells.append(("yes, " if one.holds else "**no**: ") + one.cell)
         out.append(f"| {c['short']} | " + " | ".join(cells) + f" | {holds_cell(c)} | {c['across']} | {c['unit']} |")
-    if (DOCS / "figures" / f"seeds-{task}.png").exists():
+    if (FIGURES / f"seeds-{task}.png").exists():
         out += ["", f"![{task}: loss against max in+out over training seeds, one marker per seed and the across-seed "
                 f"mean ± 95 % t-interval](figures/seeds-{task}.png)"]
     return "\n".join(out)
@@ -129,7 +129,7 @@ def seeds_task(task: str, runs: list) -> str:
 def seeds_section(by_task: dict) -> str:
     """{{seeds}}: every task of SEED_TASKS over its training seeds, then the performance profile when drawn."""
     parts = [seeds_task(t, by_task.get(t, [])) for t in SEED_TASKS]
-    if (DOCS / "figures" / "seeds-profile.png").exists():
+    if (FIGURES / "seeds-profile.png").exists():
         parts.append("![performance profile of normalized loss over tasks and training seeds: 1 = the seed's "
                      "tf-full, 0 = its no-comm](figures/seeds-profile.png)")
     return "\n\n".join(parts)

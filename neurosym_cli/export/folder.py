@@ -16,6 +16,7 @@ import shutil
 from pathlib import Path
 
 from ..errors import ConfigError, UserError
+from ..run.layout import EXPORT_MANIFEST
 
 FORMAT = "neurosym-export/1"
 """manifest.json's ``format``: the marker of an export folder"""
@@ -26,7 +27,7 @@ _CACHE = "__pycache__"
 def manifest_problem(folder: Path) -> str | None:
     """None when ``folder/manifest.json`` is an export's manifest; else why not, in words."""
     try:
-        manifest = json.loads((Path(folder) / "manifest.json").read_text())
+        manifest = json.loads((Path(folder) / EXPORT_MANIFEST).read_text())
     except FileNotFoundError:
         return "it holds no manifest.json"
     except (OSError, ValueError) as e:
@@ -44,7 +45,7 @@ def why_not_export(folder: Path) -> str | None:
     problem = manifest_problem(folder)
     if problem:
         return problem
-    listed = set(json.loads((folder / "manifest.json").read_text())["files"])
+    listed = set(json.loads((folder / EXPORT_MANIFEST).read_text())["files"])
     dirs = {p for f in listed for p in Path(f).parents if str(p) != "."}
     extra = []
     for here, subdirs, names in os.walk(folder):  # links are not followed: a link is an entry like a file
@@ -73,7 +74,7 @@ def _state(folder: Path) -> object:
     if not any(folder.iterdir()):
         return "empty"
     try:
-        m = os.lstat(folder / "manifest.json")
+        m = os.lstat(folder / EXPORT_MANIFEST)
     except OSError:
         return "other"
     return (st.st_ino, m.st_ino, m.st_mtime_ns)

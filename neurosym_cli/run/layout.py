@@ -4,11 +4,19 @@ composes them into paths, the schemes never do.
 
     <exp_dir>/train/<model>/              model.pt, history.csv, manifest.json
     <exp_dir>/synth/dataset-r<R>-s<S>.pt  the oracle dataset D, shared by every synthesis run of this oracle
-    <exp_dir>/synth/<artifact tag>/       program.txt or tree.json, summary.json, trace.csv
+    <exp_dir>/synth/<artifact tag>/       program.txt or tree.json, summary.json, trace.csv (front.json/.csv)
     <exp_dir>/eval/<baseline label>/      metrics.json, metrics.csv
     <exp_dir>/render/<baseline label>/    animations and episode pictures
     <exp_dir>/figures/                    the paper's figures
     <exp_dir>/tensorboard/<run>/          event files (logger=tensorboard)
+    <exp_dir>/pipeline_timings.json       each stage's wall time (`neurosym pipeline`)
+    <exp_dir>/select/                     selected.json, selection.json/.csv, val/<label>.json (`neurosym select`)
+    <exp_dir>/rl/                         picks.json, grid.json/.csv (`neurosym rl`)
+    <exp_dir>/stress/                     stress.json/.csv/.png (`neurosym stress`)
+    <exp_dir>/export/<baseline label>/    an export folder, its record manifest.json (`neurosym export`)
+
+``RunFolder(exp_dir)`` finds what a finished run directory holds by its path alone (reports, benchmarks);
+``RunDir(cfg)`` adds what depends on the config's baseline.
 """
 
 from __future__ import annotations
@@ -25,19 +33,155 @@ if TYPE_CHECKING:
 
 TRAIN, SYNTH, EVAL = "train", "synth", "eval"
 """the stages' folders under <exp_dir>"""
+SELECT, RL, STRESS = "select", "rl", "stress"
+"""the grid and stress verbs' folders under <exp_dir>"""
+RENDER, FIGURES, TENSORBOARD, EXPORT = "render", "figures", "tensorboard", "export"
+"""the folders of pictures, logs and exports under <exp_dir>"""
 ORACLE_DIR = "oracle"
 """train/<this>: the oracle's weights (tf-full's model directory), which hard-attn, the searches and retraining
 start from"""
 MODEL, HISTORY, MANIFEST = "model.pt", "history.csv", "manifest.json"
 """a training's checkpoint, its loss per step, and its record (train/<model>/)"""
-SUMMARY = "summary.json"
-"""a search's record beside its program or tree (synth/<tag>/)"""
+PROGRAM, TREE = "program.txt", "tree.json"
+"""the files a search writes (synth/<tag>/): a program, or decision trees (the scheme says which)"""
+SUMMARY, TRACE = "summary.json", "trace.csv"
+"""a search's record beside its program or tree, and its objective per step (synth/<tag>/)"""
+FRONT = "front.json"
+"""a search's degree-budget front (synth/<tag>/, synth.front=true; front.csv beside it)"""
 METRICS, METRICS_CSV = "metrics.json", "metrics.csv"
 """an evaluation's summary and its per-seed rows (eval/<label>/)"""
+SELECTED, SELECTION, VAL = "selected.json", "selection", "val"
+"""select/: the choice, the whole selection (.json, .csv), and the validation rows per label (val/<label>.json)"""
+PICKS, GRID = "picks.json", "grid"
+"""rl/: the picks rl1 and rl2, and every setting (.json, .csv)"""
+TIMINGS = "pipeline_timings.json"
+"""<exp_dir>/: the wall time of each stage of `neurosym pipeline`"""
+STRESS_STEM = "stress"
+"""stress/stress.json, .csv and .png"""
+EXPORT_MANIFEST = MANIFEST
+"""an export folder's record, which marks it as one (export/folder.py; the standalone check reads the same name)"""
+
+
+class _Folder:
+    """The paths of a run directory that need no config: what ``RunFolder`` and ``RunDir`` share."""
+
+    root: Path
+
+    # ------------------------------------------------------------------------------------------ train, synth
+    def trained_dir(self, model: str) -> Path:
+        """train/<model>/, the weights of one model (``ORACLE_DIR`` for the oracle's)."""
+        return self.root / TRAIN / model
+
+    def manifest_of(self, model: str) -> Path:
+        """train/<model>/manifest.json, one training's record."""
+        return self.trained_dir(model) / MANIFEST
+
+    def history_of(self, model: str) -> Path:
+        """train/<model>/history.csv, one training's loss per step."""
+        return self.trained_dir(model) / HISTORY
+
+    def manifests(self) -> list[Path]:
+        """manifest.json of every model trained here, sorted."""
+        return sorted((self.root / TRAIN).glob(f"*/{MANIFEST}"))
+
+    def synthesized_as(self, tag: str, file: str = PROGRAM) -> Path:
+        """synth/<tag>/<file>, one search's program (or ``file``: its tree)."""
+        return self.root / SYNTH / tag / file
+
+    def datasets(self) -> list[Path]:
+        """Every oracle dataset D collected here (synth/dataset-r<R>-s<S>.pt), sorted."""
+        return sorted((self.root / SYNTH).glob("dataset-*.pt"))
+
+    def programs(self) -> list[Path]:
+        """program.txt of every search made here, sorted."""
+        return sorted((self.root / SYNTH).glob(f"*/{PROGRAM}"))
+
+    @property
+    def timings_file(self) -> Path:
+        """pipeline_timings.json: each stage's wall time, in seconds, as `neurosym pipeline` kept it."""
+        return self.root / TIMINGS
+
+    # ------------------------------------------------------------------------------------------ eval
+    @property
+    def eval_root(self) -> Path:
+        """Where every baseline's evaluation directory is (and the report's figures)."""
+        return self.root / EVAL
+
+    def metrics_of(self, label: str) -> Path:
+        """eval/<label>/metrics.json, one baseline's evaluation."""
+        return self.eval_root / label / METRICS
+
+    def metrics_files(self, labels: str = "*") -> list[Path]:
+        """metrics.json of every baseline evaluated here whose label matches the glob ``labels``, sorted."""
+        return sorted(self.eval_root.glob(f"{labels}/{METRICS}"))
+
+    # ------------------------------------------------------------------------------------------ select, rl, stress
+    @property
+    def select_dir(self) -> Path:
+        return self.root / SELECT
+
+    @property
+    def selected_file(self) -> Path:
+        """select/selected.json: the choice of `neurosym select` (rules, lam, features, search settings)."""
+        return self.select_dir / SELECTED
+
+    def selection_file(self, suffix: str = ".json") -> Path:
+        """select/selection.json (or .csv): every configuration of the selection and the pick's test rows."""
+        return self.select_dir / (SELECTION + suffix)
+
+    def val_file(self, label: str) -> Path:
+        """select/val/<label>.json: one baseline's rows on the validation seeds."""
+        return self.select_dir / VAL / f"{label}.json"
+
+    @property
+    def rl_dir(self) -> Path:
+        return self.root / RL
+
+    @property
+    def picks_file(self) -> Path:
+        """rl/picks.json: rl1 and rl2 as `neurosym rl` picked them."""
+        return self.rl_dir / PICKS
+
+    def rl_grid_file(self, suffix: str = ".json") -> Path:
+        """rl/grid.json (or .csv): every rl setting and the picks' test rows."""
+        return self.rl_dir / (GRID + suffix)
+
+    @property
+    def stress_dir(self) -> Path:
+        return self.root / STRESS
+
+    def stress_file(self, suffix: str = ".json") -> Path:
+        """stress/stress.json (or .csv, .png): every baseline at every condition of `neurosym stress`."""
+        return self.stress_dir / (STRESS_STEM + suffix)
+
+    # ------------------------------------------------------------------------------------------ pictures, logs
+    @property
+    def render_root(self) -> Path:
+        """Where every baseline's animations are (render/<label>/)."""
+        return self.root / RENDER
+
+    @property
+    def figures_dir(self) -> Path:
+        """The paper's figures drawn from this run directory (`neurosym figures`)."""
+        return self.root / FIGURES
+
+    def tensorboard_dir(self, run: str) -> Path:
+        """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
+        return self.root / TENSORBOARD / run
 
 
 @dataclass(frozen=True)
-class RunDir:
+class RunFolder(_Folder):
+    """The artifacts of the run directory ``root`` found by its path alone, for readers without its config."""
+
+    root: Path
+
+    def __post_init__(self):
+        object.__setattr__(self, "root", Path(self.root))
+
+
+@dataclass(frozen=True)
+class RunDir(_Folder):
     """The artifacts of ``cfg``'s run directory (``cfg.exp_dir``) for ``cfg``'s baseline."""
 
     cfg: "RunConfig"
@@ -69,7 +213,7 @@ class RunDir:
     # ------------------------------------------------------------------------------------------ train
     @property
     def train_dir(self) -> Path:
-        return self.root / TRAIN / self.model_name
+        return self.trained_dir(self.model_name)
 
     @property
     def model_file(self) -> Path:
@@ -87,7 +231,7 @@ class RunDir:
     @property
     def oracle_file(self) -> Path:
         """The oracle's checkpoint, whatever the baseline."""
-        return self.root / TRAIN / ORACLE_DIR / MODEL
+        return self.trained_dir(ORACLE_DIR) / MODEL
 
     # ------------------------------------------------------------------------------------------ synth
     @property
@@ -103,7 +247,7 @@ class RunDir:
             return None
         if self.cfg.program and scheme.has_program:
             return Path(self.cfg.program)
-        return self.root / SYNTH / artifact.tag / artifact.file
+        return self.synthesized_as(artifact.tag, artifact.file)
 
     @property
     def program_file(self) -> Path:
@@ -127,7 +271,12 @@ class RunDir:
     @property
     def trace_file(self) -> Path:
         """A program search's objective per step (synth/<tag>/trace.csv)."""
-        return self.synth_dir / "trace.csv"
+        return self.synth_dir / TRACE
+
+    @property
+    def front_file(self) -> Path:
+        """A program search's degree-budget front (synth/<tag>/front.json, synth.front=true)."""
+        return self.synth_dir / FRONT
 
     @property
     def dataset_file(self) -> Path:
@@ -139,34 +288,25 @@ class RunDir:
         return sorted((self.root / SYNTH).glob(f"{stem}*/{SUMMARY}"))
 
     # ------------------------------------------------------------------------------------------ eval
-    @property
-    def eval_root(self) -> Path:
-        """Where every baseline's evaluation directory is (and the report's figures)."""
-        return self.root / EVAL
-
     def eval_dir(self, label: str | None = None) -> Path:
         """eval/<label>/, the baseline's label by default."""
         return self.eval_root / (label or self.label)
 
-    # ------------------------------------------------------------------------------------------ pictures, logs
+    # ------------------------------------------------------------------------------------------ pictures, export
     @property
     def render_dir(self) -> Path:
         """Animations and episode pictures of the baseline (`neurosym render`)."""
-        return self.root / "render" / self.label
+        return self.render_root / self.label
 
     @property
-    def figures_dir(self) -> Path:
-        """The paper's figures drawn from this run directory (`neurosym figures`)."""
-        return self.root / "figures"
-
-    def tensorboard_dir(self, run: str) -> Path:
-        """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
-        return self.root / "tensorboard" / run
+    def export_dir(self) -> Path:
+        """The baseline's export folder when export.dir does not name one (`neurosym export`)."""
+        return self.root / EXPORT / self.label
 
 
 def metrics_files(exp_dir: Path) -> list[Path]:
     """metrics.json of every baseline evaluated in the run directory ``exp_dir``, sorted."""
-    return sorted((Path(exp_dir) / EVAL).glob(f"*/{METRICS}"))
+    return RunFolder(exp_dir).metrics_files()
 
 
 def history_files(root: Path) -> list[Path]:

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..baselines import ORACLE, Artifact, Stage, runs_root_arg
 from ..errors import ConfigError
+from ..run.layout import PROGRAM, TREE
 from .families import OnOracle, Retrained
 
 if TYPE_CHECKING:
@@ -128,7 +129,7 @@ class Program(Searched):
         return search_variants(cfg)
 
     def artifact(self, cfg: "RunConfig") -> Artifact:
-        return Artifact(("det-" if self.det and not cfg.program else "") + search_tag(cfg), "program.txt")
+        return Artifact(("det-" if self.det and not cfg.program else "") + search_tag(cfg), PROGRAM)
 
     def label(self, cfg: "RunConfig") -> str:
         return f"{self.name}-{search_tag(cfg)}"
@@ -174,7 +175,7 @@ class Tree(Searched):
         return "dt-"
 
     def artifact(self, cfg: "RunConfig") -> Artifact:
-        return Artifact(f"dt-k{cfg.rules}-{cfg.features}", "tree.json")
+        return Artifact(f"dt-k{cfg.rules}-{cfg.features}", TREE)
 
     def label(self, cfg: "RunConfig") -> str:
         return f"{self.name}-k{cfg.rules}-{cfg.features}"

@@ -11,6 +11,7 @@ from typing import Any, Iterable, Sequence
 
 from .. import stats
 from ..errors import ConfigError
+from ..run.layout import RunFolder
 from ..utils.io import ArtifactError
 
 SHARED = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
@@ -129,7 +130,7 @@ def _remake(seed_dir: Path, verb: str, files: list[Path]) -> str:
     the bare verb when none does."""
     import shlex
 
-    for f in [*sorted(Path(seed_dir).glob("train/*/manifest.json")), *files]:
+    for f in [*RunFolder(seed_dir).manifests(), *files]:
         try:
             c = json.loads(f.read_text())
             c = c.get("config", c) if isinstance(c, dict) else {}
@@ -143,11 +144,11 @@ def _remake(seed_dir: Path, verb: str, files: list[Path]) -> str:
 
 def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
     """The evaluations of one seed directory (None when it has none)."""
-    files = sorted(Path(seed_dir).glob("eval/*/metrics.json"))
+    files = RunFolder(seed_dir).metrics_files()
     if not files:
         return None
     pick = None
-    sel = Path(seed_dir) / "select" / "selected.json"
+    sel = RunFolder(seed_dir).selected_file
     if sel.exists():
         try:
             rec = json.loads(sel.read_text())

@@ -11,6 +11,7 @@ import shutil
 from pathlib import Path
 
 from ..run import RunDir
+from ..run.layout import EXPORT_MANIFEST
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import log, say
 from ..utils.io import write_json, write_text
@@ -19,7 +20,7 @@ from . import RunInfo
 
 def export_dir(cfg: RunConfig) -> Path:
     """Where the export of ``cfg.baseline`` goes: export.dir, else <exp_dir>/export/<baseline label>."""
-    return Path(cfg.export.dir) if cfg.export.dir else Path(cfg.exp_dir) / "export" / RunDir(cfg).label
+    return Path(cfg.export.dir) if cfg.export.dir else RunDir(cfg).export_dir
 
 
 def export(cfg: RunConfig, info: RunInfo | None = None) -> dict:
@@ -140,10 +141,10 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
             "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
             "opset": OPSET if policy is not None else None, "tolerance": cfg.export.tolerance,
             "semantics": spec.SEMANTICS if program is not None else None,
-            "files": sorted(files + ["manifest.json", "README.md"]),
+            "files": sorted(files + [EXPORT_MANIFEST, "README.md"]),
             "sha256": {f: hashlib.sha256((tmp / f).read_bytes()).hexdigest() for f in sorted(files)},
         }  # sha256: the check refuses an artifact edited after the export, even one no golden decision notices
-        write_json(tmp / "manifest.json", manifest)
+        write_json(tmp / EXPORT_MANIFEST, manifest)
         write_text(tmp / "README.md", readme(manifest, meta, program, vocab, cfg, task))
         publish(tmp, folder, claimed)
     finally:

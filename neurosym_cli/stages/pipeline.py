@@ -53,7 +53,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     stages = plan(cfg.baselines)
     results = {}
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
-    timing_file = Path(cfg.exp_dir) / "pipeline_timings.json"
+    timing_file = RunDir(cfg).timings_file
     timings = read_json(timing_file, pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()

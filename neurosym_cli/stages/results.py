@@ -12,7 +12,7 @@ from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
 from ..run import RunDir, pipeline_command
-from ..run.layout import history_files, metrics_files
+from ..run.layout import FIGURES, history_files, metrics_files
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -264,7 +264,7 @@ def report(cfg: RunConfig) -> dict:
         return {"report": None}
     console.print("wrote " + ", ".join(str(f) for f in files))
     if not rc.seed_files:
-        figures = sorted(out.glob("seed*/figures/*.png")) or sorted(out.glob("figures/*.png"))
+        figures = sorted(out.glob(f"seed*/{FIGURES}/*.png")) or sorted(out.glob(f"{FIGURES}/*.png"))
         if figures:  # drawn per training seed by the pipeline or `neurosym figures`
             console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
     return {"report": str(out / "report.json")}

@@ -71,7 +71,7 @@ def pick(rows: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any]]:
 
 
 def picks_file(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "rl" / "picks.json"
+    return RunDir(cfg).picks_file
 
 
 def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
@@ -106,11 +106,10 @@ def run_rl(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
               "max_degree": r["degree"], "train_loss": r["train_loss"], "rollouts": r["rollouts"],
               "train_seconds": r["train_seconds"], "rollouts_per_second": r["rollouts_per_second"],
               "pick": ",".join(lbl for lbl, x in (("rl1", rl1), ("rl2", rl2)) if x is r)} for r in rows]
-    out = Path(cfg.exp_dir) / "rl"
-    write_csv(out / "grid.csv", table)
-    write_json(out / "grid.json", {**record, "settings": table, "test": test,
-                                   "seconds": time.perf_counter() - t0, "jobs": jobs, "runtime": runtime(),
-                                   "config": cfg.record()})
+    write_csv(RunDir(cfg).rl_grid_file(".csv"), table)
+    write_json(RunDir(cfg).rl_grid_file(), {**record, "settings": table, "test": test,
+                                            "seconds": time.perf_counter() - t0, "jobs": jobs, "runtime": runtime(),
+                                            "config": cfg.record()})
     print_grid(cfg, table, test)
     say(f"[green]rl1[/] {rl1['name']}, [green]rl2[/] {rl2['name']} -> {picks_file(cfg)} "
         f"({clock(time.perf_counter() - t0)}); their test rows are eval/rl1 and eval/rl2 "

@@ -86,7 +86,7 @@ def point_name(cfg: RunConfig) -> str:
 
 
 def _val_file(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "select" / "val" / f"{RunDir(cfg).label}.json"
+    return RunDir(cfg).val_file(RunDir(cfg).label)
 
 
 def validate(cfg: RunConfig) -> dict[str, Any]:
@@ -156,7 +156,7 @@ def _val_columns(v: dict[str, Any]) -> dict[str, Any]:
 
 # --------------------------------------------------------------------------------------------- the command
 def selected_file(cfg: RunConfig) -> Path:
-    return Path(cfg.exp_dir) / "select" / "selected.json"
+    return RunDir(cfg).selected_file
 
 
 def select_command(cfg: RunConfig) -> str:
@@ -226,9 +226,8 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
         c = dataclasses.replace(chosen, baseline=get(b), cmd="eval")
         test[b] = evaluate_baseline(c, RunInfo(True, info.log_dir))
     table = _table_rows(first, final)
-    out = Path(cfg.exp_dir) / "select"
-    write_csv(out / "selection.csv", table)
-    write_json(out / "selection.json", {
+    write_csv(RunDir(cfg).selection_file(".csv"), table)
+    write_json(RunDir(cfg).selection_file(), {
         **record, "grid": {"lam": cfg.select.lam, "rules": cfg.select.rules, "features": cfg.select.features},
         "finalists": cfg.select.finalists, "programs": first, "retrained": final,
         "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},

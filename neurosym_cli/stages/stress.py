@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from pathlib import Path
 from typing import Any
 
 from ..baselines import run_args
@@ -93,18 +92,19 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     if not results and not stops:
         raise UserError("stress: no baseline of stress.baselines is trained here; "
                         f"`neurosym pipeline {run_args(cfg)}` makes them")
-    out = Path(cfg.exp_dir) / "stress"
-    write_json(out / "stress.json", {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
-                                     "seeds": cfg.stress.seeds, "results": results, "skipped": skipped, "stops": stops,
-                                     "seconds": time.perf_counter() - t0, "runtime": runtime(),
-                                     "config": cfg.record()})
-    write_csv(out / "stress.csv", [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
-                                   for r in results])
+    out = RunDir(cfg)
+    write_json(out.stress_file(), {"task": cfg.task.name, "trained_agents_per_group": cfg.task.agents_per_group,
+                                   "seeds": cfg.stress.seeds, "results": results, "skipped": skipped, "stops": stops,
+                                   "seconds": time.perf_counter() - t0, "runtime": runtime(),
+                                   "config": cfg.record()})
+    write_csv(out.stress_file(".csv"), [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
+                                        for r in results])
     from ..plotting import stress_plot
 
-    png = stress_plot(results, cfg, out / "stress.png") if cfg.plots else None
+    png = stress_plot(results, cfg, out.stress_file(".png")) if cfg.plots else None
     print_stress(results, cfg, stops)
-    say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out / 'stress.csv'}" + (f", {png}" if png else ""))
+    say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out.stress_file('.csv')}"
+        + (f", {png}" if png else ""))
     return {"points": len(results)}
 
 

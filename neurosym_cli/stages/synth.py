@@ -15,6 +15,7 @@ from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
 from ..run import RunDir, synth_command, train_command
 from ..run.checkpoints import open_checkpoint, policy_from_payload
+from ..run.layout import PROGRAM, TREE
 from ..tasks import make_task
 from ..synth.dataset import DataBucket, load_or_collect, subsample
 from ..synth.objective import CachedScorer
@@ -212,5 +213,5 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket]
     return {"tree": str(tree_file)}
 
 
-SYNTHESIZERS = {"program.txt": search_program, "tree.json": fit_trees}
+SYNTHESIZERS = {PROGRAM: search_program, TREE: fit_trees}
 """what `synth` runs to make each kind of artifact a scheme names (``Artifact.file``, schemes/searched.py)"""
