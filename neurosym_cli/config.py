@@ -17,6 +17,8 @@ from .utils import cpu as _cpu
 from .verb_config import ExportConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
+SEARCHES = ("mcmc", "hybrid")
+"""synth.search: the program searches of synth/search.py"""
 
 
 @dataclass
@@ -193,6 +195,10 @@ class SynthConfig:
     backend: str = "auto"
     """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
+    search: str = "mcmc"
+    """mcmc: the paper's Metropolis chains with restarts; hybrid: restarts of hill climbing over every single-edit
+    neighbour, threshold fitting on the quantile grid and kicks, never scoring a program twice (synth/local.py).
+    Both score budget.mcmc_steps programs; temperature, patience and coarse apply to mcmc only"""
 
     def __post_init__(self) -> None:
         check_finite(self, "synth.")
@@ -206,6 +212,7 @@ class SynthConfig:
         _check(self.backend in ("auto", "numba", "torch"), "synth.backend must be auto, numba or torch")
         _check(self.patience >= 0, f"synth.patience must be non-negative, got {self.patience}")
         _check(self.coarse >= 1, f"synth.coarse must be at least 1, got {self.coarse}")
+        _check(self.search in SEARCHES, f"synth.search must be one of {', '.join(SEARCHES)}, got {self.search!r}")
 
 
 @dataclass

@@ -166,3 +166,93 @@ def propose(rules: tuple[Rule, ...], space: SearchSpace, rng: random.Random) -> 
         if new is not None and new != r:
             return rules[:k] + (new,) + rules[k + 1:], move
     return rules[:-1] + (random_rule(space, rng),), "rule"
+
+
+# ------------------------------------------------------------------------------- the full neighbourhood
+def grid(space: SearchSpace, name: str, sign: float) -> tuple[float, ...]:
+    """The thresholds a test ``sign * name >= c`` can take on the quantile grid, ascending (world units)."""
+    return tuple(sorted({_r2(sign * q) for q in space.quantiles[name]}))
+
+
+def _rank(values: tuple[float, ...], c: float) -> int:
+    """Index of the grid value nearest to c."""
+    return min(range(len(values)), key=lambda i: abs(values[i] - c))
+
+
+def _at_rank(space: SearchSpace, name: str, sign: float, frac: float) -> Test:
+    """The test on ``name`` with sign ``sign`` at the grid value of relative rank ``frac`` (0 lowest, 1 highest)."""
+    g = grid(space, name, sign)
+    return Test(Linear(((name, sign),)), g[int(round(frac * (len(g) - 1)))])
+
+
+def edits_of_test(t: Test, space: SearchSpace) -> list[tuple[Test, str]]:
+    """Single edits of one test: its threshold to the next grid value below and above, its feature swapped (same
+    sign, same relative rank), its side flipped (f >= c to -f >= -c)."""
+    (name, w), = t.lhs.terms
+    g = grid(space, name, w)
+    out: list[tuple[Test, str]] = []
+    below = [c for c in g if c < t.threshold]
+    above = [c for c in g if c > t.threshold]
+    if below:
+        out.append((replace(t, threshold=below[-1]), "threshold"))
+    if above:
+        out.append((replace(t, threshold=above[0]), "threshold"))
+    frac = _rank(g, t.threshold) / max(len(g) - 1, 1)
+    out += [(_at_rank(space, f, w, frac), "feature") for f in space.features if f != name]
+    out.append((Test(Linear(((name, -w),)), _r2(-t.threshold)), "sign"))
+    return out
+
+
+def edits_of_cond(c: Cond, space: SearchSpace) -> list[tuple[Cond, str]]:
+    """Single edits of a filter: each test edited (``edits_of_test``), each clause dropped, a clause added (a
+    test on each feature and side at the median, alone or joined by and/or), and/or toggled."""
+    out: list[tuple[Cond, str]] = []
+    for path in _tests(c):
+        out += [(_set(c, path, t), move) for t, move in edits_of_test(_get(c, path), space)]  # type: ignore[arg-type]
+    fresh = [_at_rank(space, f, s, 0.5) for f in space.features for s in (1.0, -1.0)]
+    if isinstance(c, TrueCond):
+        out += [(t, "shape") for t in fresh]
+    elif isinstance(c, Test):
+        out.append((TrueCond(), "shape"))
+        if space.max_depth >= 2:
+            out += [(op(c, t), "shape") for op in (And, Or) for t in fresh if t.lhs != c.lhs]
+    else:
+        out += [(c.left, "shape"), (c.right, "shape"), ((Or if isinstance(c, And) else And)(c.left, c.right), "shape")]
+    return out
+
+
+def edits_of_rule(r: Rule, space: SearchSpace) -> list[tuple[Rule, str]]:
+    """Single edits of one rule: its filter (``edits_of_cond``), its argmax score's feature or sign, its kind."""
+    out: list[tuple[Rule, str]] = [(replace(r, cond=c), move) for c, move in edits_of_cond(r.cond, space)]
+    scores = [Linear(((f, s),)) for f in space.score_features for s in (1.0, -1.0)]
+    if isinstance(r, ArgMaxRule):
+        out += [(replace(r, score=sc), "feature" if sc.terms[0][0] != r.score.terms[0][0] else "sign")
+                for sc in scores if sc != r.score]
+        if not space.det:
+            out.append((RandomRule(r.cond), "kind"))
+    else:
+        out += [(ArgMaxRule(sc, r.cond), "kind") for sc in scores]
+    return out
+
+
+def neighbours(rules: tuple[Rule, ...], space: SearchSpace) -> list[tuple[tuple[Rule, ...], str]]:
+    """Every single-edit neighbour of a round's rules (``edits_of_rule`` of each rule), with its move name:
+    the hill-climbing neighbourhood of synth/local.py (``propose`` draws one such edit at random instead)."""
+    return [(rules[:k] + (new,) + rules[k + 1:], move)
+            for k, r in enumerate(rules) for new, move in edits_of_rule(r, space) if new != r]
+
+
+def test_sites(rules: tuple[Rule, ...]) -> list[tuple[int, tuple[str, ...]]]:
+    """(rule index, path) of every filter test of a round's rules: the coordinates of threshold fitting."""
+    return [(k, path) for k, r in enumerate(rules) for path in _tests(r.cond)]
+
+
+def test_at(rules: tuple[Rule, ...], site: tuple[int, tuple[str, ...]]) -> Test:
+    k, path = site
+    return _get(rules[k].cond, path)  # type: ignore[return-value]
+
+
+def with_test(rules: tuple[Rule, ...], site: tuple[int, tuple[str, ...]], t: Test) -> tuple[Rule, ...]:
+    """The rules with the test at ``site`` replaced by ``t``."""
+    k, path = site
+    return rules[:k] + (replace(rules[k], cond=_set(rules[k].cond, path, t)),) + rules[k + 1:]

@@ -52,6 +52,8 @@ def search_variants(cfg: "RunConfig") -> list[tuple[str, str]]:
         out.append((f"-coarse{cfg.synth.coarse}", f" synth.coarse={cfg.synth.coarse}"))
     if cfg.synth.patience:
         out.append((f"-patience{cfg.synth.patience}", f" synth.patience={cfg.synth.patience}"))
+    if cfg.synth.search != "mcmc":
+        out.append((f"-{cfg.synth.search}", f" synth.search={cfg.synth.search}"))
     return out
 
 

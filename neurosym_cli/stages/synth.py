@@ -99,7 +99,8 @@ def collect_dataset(cfg: RunConfig):
 def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device) -> dict:
     spec = RoundSpec(steps=cfg.budget.mcmc_steps, restarts=cfg.synth.restarts, final_fraction=cfg.synth.final_fraction,
                      temperature=cfg.synth.temperature, rules=cfg.rules, max_depth=cfg.synth.max_depth,
-                     det=cfg.baseline.det, own_scores=cfg.synth.own_scores, patience=cfg.synth.patience)
+                     det=cfg.baseline.det, own_scores=cfg.synth.own_scores, patience=cfg.synth.patience,
+                     search=cfg.synth.search)
     results, trace, rounds = [], [], []
     rich = use_rich(cfg.progress, info.multirun)
     rd = RunDir(cfg)

@@ -82,6 +82,8 @@ class SearchResult:
     hall: HallOfFame = field(default_factory=HallOfFame)
     stopped: dict[str, int] = field(default_factory=dict)
     """phases ended early by ``patience``: phase name -> proposals it ran"""
+    skipped: int = 0
+    """programs met again and not scored a second time (the hybrid search's equivalence cache; MCMC: 0)"""
 
     @property
     def proposals_per_second(self) -> float:

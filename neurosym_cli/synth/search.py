@@ -1,4 +1,5 @@
-"""One synthesis run: the search space from the dataset, then MCMC for each communication round."""
+"""One synthesis run: the search space from the dataset, then the search (MCMC, or the hybrid local search of
+local.py) for each communication round."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import torch
 
 from ..dsl.ast import Program
 from ..dsl.sampling import SearchSpace, propose, random_rules
+from .local import hybrid
 from .mcmc import SearchResult, metropolis
 from .objective import CachedScorer
 
@@ -44,18 +46,27 @@ class RoundSpec:
     own_scores: bool = True
     patience: int = 0
     """proposals without a new chain best that end a phase (0: never)"""
+    search: str = "mcmc"
+    """mcmc (the paper's Metropolis chains) or hybrid (local.py: hill climbing, fitting, kicks, no program twice)"""
+    seconds: float = 0.0
+    """hybrid only: wall-clock limit of the round's search (0: the steps alone bound it)"""
 
 
 def search_round(scorer: CachedScorer, spec: RoundSpec, seed: str, gen: torch.Generator,
-                 on_step: Callable | None = None, coarse: CachedScorer | None = None) -> SearchResult:
-    """MCMC for one round's rules; ``seed`` fixes every proposal and acceptance draw. ``coarse`` (the same objective
-    on a subsample of D) scores the restarts; the feature quantiles always come from the whole of D."""
+                 on_step: Callable | None = None, coarse: CachedScorer | None = None, *,
+                 start: tuple | None = None) -> SearchResult:
+    """The search (``spec.search``) for one round's rules; ``seed`` fixes every proposal and acceptance draw.
+    ``coarse`` (the same objective on a subsample of D) scores MCMC's restarts; the feature quantiles always come
+    from the whole of D."""
     vocab = scorer.fmap.vocab
     space = SearchSpace(feature_quantiles(scorer, gen), spec.rules, spec.max_depth, spec.det, spec.own_scores,
                         frozenset(n for n in vocab.names if vocab.agent_level(n)))
     rng = random.Random(seed)
+    if spec.search == "hybrid":  # patience, coarse and temperature are MCMC's levers: the hybrid has its own
+        return hybrid(lambda: random_rules(space, rng), space, scorer, steps=spec.steps, restarts=spec.restarts,
+                      final_fraction=spec.final_fraction, rng=rng, seconds=spec.seconds, on_step=on_step)
     return metropolis(
-        init=lambda: random_rules(space, rng),
+        init=(lambda: start) if start is not None else (lambda: random_rules(space, rng)),  # start: front.py
         propose=lambda rules: propose(rules, space, rng),
         scorer=scorer, steps=spec.steps, restarts=spec.restarts, final_fraction=spec.final_fraction,
         temperature=spec.temperature, rng=rng, on_step=on_step, patience=spec.patience, coarse=coarse,
