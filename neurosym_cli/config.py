@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .baselines import BaselineConfig
+from .degrees import OBJECTIVES
 from .errors import ConfigError, UserError, check as _check, check_finite, check_name, cut, lies_under  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import cpu as _cpu
 from .verb_config import ExportConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig, StressConfig
@@ -41,8 +42,12 @@ class TaskConfig:
     """cut gradients through the state between steps (reference does so for unlabeled)"""
     rules: int = 2
     """the paper's K for this task (cross 5, grid 2, unlabeled 5); the default of the top-level ``rules``"""
-    lam: float = 0.5
-    """the paper's lambda-tilde for this task (cross 0.5, grid 0.5, unlabeled 0.7)"""
+    lam: float = 0.25
+    """the default of the top-level ``lam``, the weight of the degree term in ``objective``'s units: the paper's
+    tasks state the paper's lambda-tilde (cross 0.5, grid 0.5, unlabeled 0.7) with objective paper; a task that
+    states neither gets the scaled objective's 0.25 (docs/fidelity.md, 'Trade-off')"""
+    objective: str = "scaled"
+    """the default of ``synth.objective`` for this task (degrees.OBJECTIVES): the paper's tasks say paper"""
     eval_episodes: int = 5
     """episodes per evaluation seed when the task has no fixed test settings"""
     test_settings: list[str] = field(default_factory=list)
@@ -60,6 +65,8 @@ class TaskConfig:
         _check(self.rounds >= 1, f"task.rounds must be at least 1, got {self.rounds}")
         _check(self.agents_per_group > 1, "task.agents_per_group must be at least 2")
         _check(self.eval_episodes > 0, "task.eval_episodes must be positive")
+        _check(self.objective in OBJECTIVES, f"task.objective must be one of {', '.join(OBJECTIVES)}, "
+               f"got {self.objective!r}")
         _check(0.0 <= self.link_failure < 1.0, f"task.link_failure must lie in [0, 1), got {self.link_failure}")
 
     @property
@@ -174,7 +181,9 @@ class SynthConfig:
     """Metropolis temperature relative to the current objective: accept a worse program with
     probability exp(-(new - cur) / (temperature * |cur|)) (reference: 0.1)"""
     objective: str = "paper"
-    """paper: L1 + lam * max_i(in + out); hinge: L1 + lam * (relu(max in - K) + relu(max out - K)) (reference)"""
+    """paper: L1 + lam * max_i(in + out) in the task's action units; hinge: L1 + lam * (relu(max in - K) +
+    relu(max out - K)) (reference); scaled: L1 / L1(silence on D) + lam * max_i(in + out) / 2K, one lam for every
+    task (silence scores 1). Composed, it is the task's ``objective`` (degrees.OBJECTIVES; docs/extending.md)"""
     random_samples: int = 1
     """samples of every random rule used to estimate the expected objective (common random numbers)"""
     max_depth: int = 2
@@ -192,6 +201,13 @@ class SynthConfig:
     coarse: int = 1
     """score the restart phases on every coarse-th state of D only (the same objective on a subsample); each
     restart's best is scored on the whole of D, and the final chain always runs on the whole of D. 1 = off"""
+    front: bool = False
+    """also search the degree-budget front: for each budget of max in+out on D, the lowest-L1 program within it
+    (synth/front.py), written to synth/<tag>/front.json; the program the single-lam search picks is unchanged"""
+    front_budgets: list[float] = field(default_factory=list)
+    """the front's budgets of max in+out; empty: 0 (silence), 1, ..., min(K + N - 1, 3K)"""
+    front_steps: int = 0
+    """MCMC proposals of each budget's constrained search; 0: the search's steps shared among the budgets"""
     backend: str = "auto"
     """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
@@ -206,7 +222,10 @@ class SynthConfig:
         _check(self.restarts >= 0, "synth.restarts must be non-negative")
         _check(0.0 <= self.final_fraction < 1.0, "synth.final_fraction must lie in [0, 1)")
         _check(self.temperature > 0, "synth.temperature must be positive")
-        _check(self.objective in ("paper", "hinge"), "synth.objective must be paper or hinge")
+        _check(self.objective in OBJECTIVES, f"synth.objective must be one of {', '.join(OBJECTIVES)}, "
+               f"got {self.objective!r}")
+        _check(all(b >= 0 for b in self.front_budgets), "synth.front_budgets must be non-negative degrees")
+        _check(self.front_steps >= 0, f"synth.front_steps must be non-negative, got {self.front_steps}")
         _check(self.random_samples > 0, "synth.random_samples must be positive")
         _check(self.max_depth in (1, 2), "synth.max_depth must be 1 or 2")
         _check(self.backend in ("auto", "numba", "torch"), "synth.backend must be auto, numba or torch")

@@ -9,10 +9,14 @@ Per step (and round), agent i hears in_i others and is heard by out_i others. Th
 
 Evaluations average each over the steps (and rounds) of an episode, then over episodes and seeds; the synthesis
 objective averages max in+out over the states of its dataset D (``synth.objective=hinge``: the reference's
-relu(max in - K) + relu(max out - K) instead).
+relu(max in - K) + relu(max out - K) instead; ``scaled``: both terms in the dataset's own scales).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import UserError
 
 NAMES = {"max_in": "max in", "max_out": "max out", "max_degree": "max in+out", "mean_degree": "mean in+out"}
 """metric key -> its word (table headers, log lines, axis labels)"""
@@ -23,13 +27,71 @@ LEGEND = ("max in / max out: the most agents one agent hears / is heard by; max 
 """the one line under every table that shows degrees"""
 
 
+@dataclass(frozen=True)
+class Objective:
+    """One form of the synthesis objective (``synth.objective``): what its degree term counts and whether its two
+    terms are stated in the dataset's own scales (synth/objective.py computes it; docs/fidelity.md, 'Trade-off')."""
+
+    name: str
+    hinge: bool
+    """the degree term is the reference's relu(max in - K) + relu(max out - K), else max_i (in_i + out_i)"""
+    scaled: bool
+    """L1 / L1(silence on D) + lam * degree / (2K): silence scores 1 whatever the task's action units"""
+    help: str
+
+    @property
+    def term(self) -> str:
+        """The word for its degree term."""
+        return "K-excess" if self.hinge else "max in+out"
+
+    @property
+    def legend(self) -> str:
+        """One line saying what its degree term is (and its scales)."""
+        if self.hinge:
+            return "K-excess: relu(max in - K) + relu(max out - K) on the synthesis dataset D, mean over its states"
+        line = "max in+out: the program's max_i (in_i + out_i) on the synthesis dataset D, mean over its states"
+        if self.scaled:
+            line += ("; L1 is divided by silence's L1 on D and max in+out by 2K (what K rules reach when every agent "
+                     "hears K and is heard by K): silence scores 1")
+        return line
+
+    def total(self, l1: float, degree: float, lam: float, scale: tuple[float, float]) -> float:
+        """The objective from its terms; ``scale`` = (L1 of silence on D, reference degree 2K), read if scaled."""
+        if self.scaled:
+            return l1 / scale[0] + lam * degree / scale[1]
+        return l1 + lam * degree
+
+    def formula(self, l1: float, degree: float, lam: float, scale: tuple[float, float]) -> str:
+        """'L1 ... + lam x term ...' as the program header and show-program print it."""
+        if self.scaled:
+            return (f"L1 {l1:.4f} / silence {scale[0]:.4f} + {lam:g} x {self.term} {degree:.4f} / "
+                    f"{scale[1]:g}")
+        return f"L1 {l1:.4f} + {lam:g} x {self.term} {degree:.4f}"
+
+
+OBJECTIVES = {o.name: o for o in (
+    Objective("paper", hinge=False, scaled=False, help="L1 + lam x max in+out, in the task's action units (paper "
+              "section 3.4)"),
+    Objective("hinge", hinge=True, scaled=False, help="L1 + lam x (relu(max in - K) + relu(max out - K)) (the "
+              "reference's)"),
+    Objective("scaled", hinge=False, scaled=True, help="L1 / L1(silence) + lam x max in+out / 2K: the trade-off in "
+              "the task's own units, one lam for every task"),
+)}
+"""synth.objective -> its form"""
+
+
+def objective_form(objective: str) -> Objective:
+    """The form of ``synth.objective``; one line naming the choices for another name."""
+    if objective not in OBJECTIVES:
+        raise UserError(f"synth.objective={objective!r} is not one of {', '.join(OBJECTIVES)}")
+    return OBJECTIVES[objective]
+
+
 def objective_term(objective: str) -> str:
     """The word for the synthesis objective's degree term under ``synth.objective``."""
-    return "max in+out" if objective == "paper" else "K-excess"
+    return objective_form(objective).term
 
 
 def objective_legend(objective: str) -> str:
     """One line saying what the objective's degree term is."""
-    if objective == "paper":
-        return "max in+out: the program's max_i (in_i + out_i) on the synthesis dataset D, mean over its states"
-    return "K-excess: relu(max in - K) + relu(max out - K) on the synthesis dataset D, mean over its states"
+    return objective_form(objective).legend

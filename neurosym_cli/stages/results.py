@@ -8,6 +8,7 @@ from pathlib import Path
 
 from .. import schemes
 from ..config import RunConfig
+from ..baselines import run_args
 from ..degrees import LEGEND, NAMES
 from ..plotting import figure2, pareto_plot, training_curves
 from ..rollout import METRICS
@@ -16,6 +17,7 @@ from ..run.layout import FIGURES, history_files, metrics_files
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
+from .guard import communication_guard
 
 COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
            ("collisions", "collisions")]
@@ -139,6 +141,9 @@ def print_table(cfg: RunConfig) -> None:
     """The results table of every baseline evaluated in this experiment directory, and its plot."""
     rows = collect(Path(cfg.exp_dir), pipeline_command(cfg))
     console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95", caption=LEGEND))
+    line = communication_guard(rows, f"neurosym synth baseline=prog {run_args(cfg)}")
+    if line:
+        log.warning(line)
     if cfg.plots:
         png = write_figure(cfg)
         console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")

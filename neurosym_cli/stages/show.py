@@ -12,13 +12,14 @@ from rich.table import Table
 
 from ..config import ConfigError, RunConfig
 from ..run import RunDir, synth_command
-from ..run.layout import SUMMARY
-from ..degrees import objective_legend, objective_term
+from ..run.layout import FRONT, SUMMARY
+from ..degrees import objective_form, objective_legend, objective_term
 from ..dsl.ast import Program, rule_features
 from ..dsl.vocabulary import FeatureSet
 from ..dsl.printer import describe, rule_text
 from ..utils.console import console
 from ..dsl.files import load_program
+from .front import print_front, read_front
 
 
 def _features(rule, vocab: FeatureSet) -> str:
@@ -76,6 +77,9 @@ def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: 
             try:
                 sub = (f"objective {info['objective']:.4f} = L1 action error {info['l1']:.4f} + {lam:g} x {term} "
                        f"{info['degree']:.3f}")
+                if objective_form(objective).scaled:  # the terms in the dataset's units (summary's scale)
+                    sub = (f"objective {info['objective']:.4f} = "
+                           + objective_form(objective).formula(info["l1"], info["degree"], lam, tuple(info["scale"])))
             except (KeyError, TypeError, ValueError):
                 sub = ""  # a summary of another shape: the rules are still worth showing
         name = f"{title}, round {r + 1}" if program.n_rounds > 1 else title
@@ -135,4 +139,7 @@ def show_program(cfg: RunConfig) -> dict:
     if not isinstance(rounds, list) or not isinstance(lam, (int, float)):
         rounds, lam = None, None
     render(program, fmap.vocab, rounds, lam, title=str(Path(path)), objective=objective)
+    front = path.parent / FRONT  # synth.front=true wrote one beside the program
+    if front.is_file():
+        print_front(read_front(front, f"{synth_command(cfg)} synth.front=true overwrite=true"), str(front))
     return {"program": str(path)}

@@ -9,7 +9,7 @@ import torch
 
 from .. import __version__
 from ..config import ConfigError, RunConfig, UserError
-from ..degrees import objective_term
+from ..degrees import objective_form
 from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
@@ -30,6 +30,7 @@ from ..dsl.files import save_program
 from ..utils.io import read_json, write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
+from .front import round_front, write_front
 from .show import render
 
 
@@ -49,7 +50,8 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
                           "show-program")
     rd = RunDir(cfg)
     result = rd.artifact_file()
-    if result.exists() and rd.summary_file.exists() and not cfg.overwrite:
+    front_missing = cfg.synth.front and artifact.file == PROGRAM and not rd.front_file.exists()
+    if result.exists() and rd.summary_file.exists() and not cfg.overwrite and not front_missing:
         from ..run.models import scheme_provider
 
         scheme_provider(cfg)  # a corrupt result is an error, never "already done"
@@ -101,21 +103,24 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                      temperature=cfg.synth.temperature, rules=cfg.rules, max_depth=cfg.synth.max_depth,
                      det=cfg.baseline.det, own_scores=cfg.synth.own_scores, patience=cfg.synth.patience,
                      search=cfg.synth.search)
-    results, trace, rounds = [], [], []
+    results, trace, rounds, fronts = [], [], [], []
     rich = use_rich(cfg.progress, info.multirun)
     rd = RunDir(cfg)
     tag = rd.program_tag
     for r in range(cfg.task.rounds):
         # appendix A: each round's program is searched alone, the other rounds keep soft attention
-        scorer = CachedScorer(policy, env, data, round_idx=r, version=cfg.features, lam=cfg.lam,
-                              objective=cfg.synth.objective, cap=cfg.rules, samples=cfg.synth.random_samples,
-                              gen=generator(cfg.seed, STREAM_SYNTH, r), device=device, backend=cfg.synth.backend)
+        def make_scorer(objective: str, r: int = r) -> CachedScorer:
+            return CachedScorer(policy, env, data, round_idx=r, version=cfg.features, lam=cfg.lam,
+                                objective=objective, cap=cfg.rules, samples=cfg.synth.random_samples,
+                                gen=generator(cfg.seed, STREAM_SYNTH, r), device=device, backend=cfg.synth.backend)
+
+        scorer = make_scorer(cfg.synth.objective)
         coarse = None
         if cfg.synth.coarse > 1:  # the restarts' scorer: every coarse-th state of D, its own random numbers
             coarse = CachedScorer(policy, env, subsample(data, cfg.synth.coarse), round_idx=r, version=cfg.features,
                                   lam=cfg.lam, objective=cfg.synth.objective, cap=cfg.rules,
                                   samples=cfg.synth.random_samples, gen=generator(cfg.seed, STREAM_SYNTH, 300 + r),
-                                  device=device, backend=cfg.synth.backend)
+                                  device=device, backend=cfg.synth.backend, scale=scorer.scale)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
         run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
         with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp, \
@@ -146,12 +151,18 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                        "backend": "numba" if scorer.compiled else "torch",
                        "full_forward_check": None if full is None else full.total,
                        "simplified": dropped, "searched_program": searched, "rule_stats": stats,
-                       "stopped_early": res.stopped, "hall_of_fame": hall_of_fame(res, searched_rules)})
+                       "stopped_early": res.stopped, "hall_of_fame": hall_of_fame(res, searched_rules),
+                       **({"scale": [scorer.scale.l1, scorer.scale.degree]} if scorer.scale else {})})
+        if cfg.synth.front:  # after everything above: the front's chains move no number of the single-lam search
+            fronts.append(round_front(cfg, spec, scorer, [rules for _, rules in res.hall.by_degree.values()],
+                                      round_idx=r, tag=tag, make_scorer=make_scorer))
     program = as_program(results)
     header = [f"neurosym program for {cfg.task.name}: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
               f" det={str(cfg.baseline.det).lower()} seed={cfg.seed} budget={cfg.budget.name}"]
-    header += [f"round {x['round']}: objective {x['objective']:.4f} = L1 {x['l1']:.4f} + {cfg.lam:g} x "
-               f"{objective_term(cfg.synth.objective)} {x['degree']:.4f}" for x in rounds]
+    form = objective_form(cfg.synth.objective)
+    header += [f"round {x['round']}: objective {x['objective']:.4f} = "
+               f"{form.formula(x['l1'], x['degree'], cfg.lam, x.get('scale', (1.0, 1.0)))}" for x in rounds]
+    rd.front_file.unlink(missing_ok=True)  # a front belongs to the search that made it
     save_program(rd.program_file, to_text(program), header)
     write_csv(rd.trace_file, trace)
     write_json(rd.summary_file, {
@@ -162,8 +173,11 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         "runtime": runtime(), "config": cfg.record(),
     })
     say(f"[green]synthesized[/] {rd.program_file}")
+    if fronts:
+        write_front(rd.front_file, cfg, tag, fronts)
+        say(f"[green]degree-budget front[/] {rd.front_file} (`neurosym show-program` prints it)")
     if not info.multirun:
-        render(program, env.features(cfg.features).vocab, rounds, cfg.lam)
+        render(program, env.features(cfg.features).vocab, rounds, cfg.lam, objective=cfg.synth.objective)
     return {"program": str(rd.program_file), "objective": sum(x["objective"] for x in rounds),
             "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
 

@@ -4,7 +4,8 @@
 
 a is the oracle's action, a^P the action of the same transformer when each agent hears only the agents P picks
 (soft attention renormalised over them, section 3.3); deg = in + out. ``objective=hinge`` uses the reference's
-lam * (relu(max in - K) + relu(max out - K)) instead.
+lam * (relu(max in - K) + relu(max out - K)) instead; ``objective=scaled`` states both terms in the dataset's own
+scales, L1 / L1(silence) + lam * deg / 2K (degrees.Objective), so that one lam means the same trade-off on every task.
 
 The scorer caches everything that does not depend on the program (state embeddings, attention logits, value
 vectors, features, and the uniforms of random rules: common random numbers), evaluates only the rules a
@@ -29,6 +30,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from ..dsl.ast import Program, RandomRule, Rule
+from ..degrees import objective_form
 from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
 from ..tasks.base import Task, Observation
 from ..policy.transformer import CommTransformer
@@ -42,6 +44,19 @@ class Score:
     total: float
     l1: float  # mean over states of sum_i ||a_i - a^P_i||_1
     degree: float  # mean over states of the degree term, before lam
+
+
+@dataclass(frozen=True)
+class Scale:
+    """The dataset's own units of the two terms (``objective=scaled``): L1 of the oracle's silent self on D (every
+    agent hears nobody in the searched round; the action gap that communication can close) and the reference degree
+    2K (max in+out when every agent hears K others and is heard by K)."""
+
+    l1: float
+    degree: float
+
+    def pair(self) -> tuple[float, float]:
+        return (self.l1, self.degree)
 
 
 class _Uniforms:
@@ -95,11 +110,13 @@ class CachedScorer:
 
     def __init__(self, policy: CommTransformer, env: Task, buckets: list[DataBucket], *,
                  round_idx: int, version: str, lam: float, objective: str, cap: int, samples: int,
-                 gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto"):
+                 gen: torch.Generator, device: torch.device, cache_size: int = 256, backend: str = "auto",
+                 scale: Scale | None = None):
         self.policy = policy.eval()
         # compiled bookkeeping and rule scans on CPU; torch elsewhere (GPUs, no numba) and as the reference
         self.compiled = kernels.use_compiled(backend, device)
         self.env, self.round, self.lam, self.objective, self.cap = env, round_idx, lam, objective, cap
+        self.form = objective_form(objective)
         self.samples, self.device = samples, device
         # every (bucket, rule position, sample) draws its uniforms from its own seed: random rules at different
         # positions are independent, as at run time, and the draws do not depend on the search path
@@ -116,6 +133,38 @@ class CachedScorer:
         self.pending: tuple[tuple, list[list[_Current]]] | None = None
         self.rows_recomputed = 0  # agents whose action was recomputed (incremental scoring)
         self.memo_hits = 0  # agents whose L1 came from the memo of earlier sets
+        # the scaled objective's units: given (a coarse scorer takes the whole of D's), else measured on this D
+        self.scale = scale if scale is not None else (self.measure_scale() if self.form.scaled else None)
+
+    def measure_scale(self) -> Scale:
+        """The units of ``objective=scaled`` on this D: (L1 of silence, 2K); a D where silence loses nothing (the
+        oracle ignores its messages) is refused, since no program could then improve on silence."""
+        l1 = self.silent_l1()
+        if not l1 > 0:
+            from ..errors import UserError
+
+            raise UserError("synth.objective=scaled: the oracle's actions do not change when it hears nobody (L1 of "
+                            "silence on D is 0), so there is nothing to trade; use synth.objective=paper")
+        return Scale(l1, 2.0 * self.cap)
+
+    @torch.no_grad()
+    def silent_l1(self) -> float:
+        """Mean over states of sum_i ||a_i - a_i^silent||_1: the oracle against itself hearing nobody in this round
+        (the other rounds keep soft attention). Touches no cache, so it moves no search."""
+        total = 0.0
+        for d in self.data:
+            rows = torch.arange(d.s * d.n, device=self.device)
+            none = torch.full((d.s * d.n, self.cap), -1, dtype=torch.long, device=self.device)
+            valid = torch.zeros_like(none, dtype=torch.bool)
+            if self.last_round:
+                total += float(self._l1_rows(d, rows, none, valid).sum())
+            else:
+                total += float(self._l1_later(d, self._round_out(d, rows, none, valid)).sum())
+        return total / self.total_states
+
+    def _total(self, l1: float, deg: float) -> float:
+        """The objective from its terms (the paper's form: l1 + lam * deg, as always)."""
+        return self.form.total(l1, deg, self.lam, self.scale.pair() if self.scale is not None else (1.0, 1.0))
 
     # ------------------------------------------------------------------------------------------ picks
     def _uniforms(self, bi: int, position: int, sample: int) -> Tensor:
@@ -338,11 +387,22 @@ class CachedScorer:
         self.pending = (keys, states)
         norm = self.total_states * self.samples
         l1, deg = l1_sum / norm, deg_sum / norm
-        return Score(l1 + self.lam * deg, l1, deg)
+        return Score(self._total(l1, deg), l1, deg)
 
     def accept(self) -> None:
         """Make the last scored program the base of incremental scoring."""
         self.current = self.pending
+
+    def degree_stats(self) -> dict[str, float]:
+        """max in and max out of the last scored program: mean over the states of D (and random samples) of the
+        most agents one agent hears / is heard by."""
+        assert self.pending is not None, "score a program first"
+        sums = {"max_in": 0.0, "max_out": 0.0}
+        for d, per_sample in zip(self.data, self.pending[1]):
+            for c in per_sample:
+                sums["max_in"] += float(c.deg_in.view(d.s, d.n).amax(-1).sum())
+                sums["max_out"] += float(c.deg_out.view(d.s, d.n).amax(-1).sum())
+        return {k: v / (self.total_states * self.samples) for k, v in sums.items()}
 
     # ---------------------------------------------------------------------------- reference scorer
     @torch.no_grad()
@@ -375,4 +435,4 @@ class CachedScorer:
                     pk = masks["picks"]
                     deg_sum += float(degree_term(pk, dedup_valid(pk), d.n, self.objective, self.cap).sum())
         norm = self.total_states * self.samples
-        return Score(l1_sum / norm + self.lam * deg_sum / norm, l1_sum / norm, deg_sum / norm)
+        return Score(self._total(l1_sum / norm, deg_sum / norm), l1_sum / norm, deg_sum / norm)

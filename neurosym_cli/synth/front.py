@@ -1,0 +1,111 @@
+"""The degree-budget front (``synth.front=true``): for each budget b of the degree (max in+out on D, mean over its
+states), the lowest-L1 program found whose degree is within b, from b = 0 (silence) up to what K rules reach.
+
+Cheap by construction: every program the single-lam search scored on the whole of D is already archived by degree
+level (``mcmc.HallOfFame.by_degree``, the lowest L1 per level); each budget then runs a short constrained chain,
+L1 / L1(silence) + PENALTY * relu(degree - b), started from the best archived program within b, and every program
+those chains score joins the pool. A budget's row is the lowest-L1 program of the pool within it, so the front is
+monotone: a larger budget may take any smaller budget's program (it is within the larger budget too).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import torch
+
+from ..dsl.ast import And, Linear, Program, RandomRule, Rule, Test
+from ..dsl.printer import to_text
+from .objective import CachedScorer, Score
+from .search import RoundSpec, search_round
+
+PENALTY = 100.0
+"""the constrained objective's price of one unit of degree above the budget, in units of silence's L1: any excess
+costs more than silence's whole action gap, so a chain never settles above its budget"""
+TOL = 1e-9
+"""a degree within TOL of the budget is within it (the degree is a mean of integers)"""
+
+
+def default_budgets(k: int, n_max: int) -> list[float]:
+    """0 (silence), 1, ..., min(K + N - 1, 3K): K + N - 1 is the most K rules can reach (hear K, be heard by all
+    N - 1 others); 3K bounds the search where N is large (a K-rule program's degree beyond 3K means one agent is a
+    hub, which the front need not map step by step)."""
+    return [float(b) for b in range(min(k + n_max - 1, 3 * k) + 1)]
+
+
+def silence(feature: str, k: int) -> tuple[Rule, ...]:
+    """K rules that never fire: random(filter(f >= 1 and f <= 0, l)) asks for both at once."""
+    never = RandomRule(And(Test(Linear(((feature, 1.0),)), 1.0), Test(Linear(((feature, -1.0),)), -0.0)))
+    return (never,) * k
+
+
+class BudgetScorer:
+    """The constrained objective of one budget, over a round's scorer: L1 / L1(silence) + PENALTY * relu(degree -
+    budget); ``Score.l1`` and ``Score.degree`` stay the scorer's (action units, max in+out)."""
+
+    def __init__(self, scorer: CachedScorer, budget: float, unit: float):
+        self.scorer, self.budget, self.unit = scorer, budget, unit
+        self.fmap, self.data = scorer.fmap, scorer.data  # what search_round reads to build the search space
+
+    def score(self, rules: tuple[Rule, ...]) -> Score:
+        s = self.scorer.score(rules)
+        return Score(s.l1 / self.unit + PENALTY * max(0.0, s.degree - self.budget), s.l1, s.degree)
+
+    def accept(self) -> None:
+        self.scorer.accept()
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One program of the pool, scored by the front's scorer (degree: max in+out, whatever the search's objective)."""
+
+    rules: tuple[Rule, ...]
+    l1: float
+    degree: float
+    max_in: float
+    max_out: float
+    source: str  # silence, search (the single-lam search's archive), budget<b> (that budget's constrained chain)
+
+
+def _entry(scorer: CachedScorer, rules: tuple[Rule, ...], source: str) -> Entry:
+    s = scorer.score(rules)
+    stats = scorer.degree_stats()
+    return Entry(rules, s.l1, s.degree, stats["max_in"], stats["max_out"], source)
+
+
+def best_within(pool: list[Entry], budget: float) -> Entry | None:
+    """The lowest-L1 entry whose degree is within ``budget`` (ties: the lower degree, then the earlier entry)."""
+    ok = [e for e in pool if e.degree <= budget + TOL]
+    return min(ok, key=lambda e: (e.l1, e.degree)) if ok else None
+
+
+def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[Rule, ...]], budgets: list[float],
+                 steps: int, seed: str, gen: torch.Generator) -> list[dict]:
+    """One row per budget, ascending: {budget, l1, l1_ratio, degree, max_in, max_out, program, source}.
+
+    ``scorer`` must count max in+out (objective paper or scaled); ``archive``: programs the single-lam search found
+    (its hall of fame by degree level); ``steps``: proposals of each budget's constrained chain; ``seed``: the
+    chains' draws (each budget its own), so the front never moves the single-lam search that ran before it."""
+    assert not scorer.form.hinge, "the front counts max in+out: give it a paper or scaled scorer"
+    unit = scorer.silent_l1()
+    if not unit > 0:
+        unit = 1.0  # the oracle ignores its messages: every program ties with silence, L1 ratios read as L1
+    pool = [_entry(scorer, silence(scorer.data[0].feats.names[0], spec.rules), "silence")]
+    pool += [_entry(scorer, rules, "search") for rules in archive]
+    chain = dataclasses.replace(spec, steps=steps, restarts=0, patience=0, search="mcmc")
+    for b in sorted(budgets):
+        start = best_within(pool, b)
+        if b <= TOL or steps == 0 or start is None:
+            continue  # budget 0 admits silence alone: nothing to search
+        res = search_round(BudgetScorer(scorer, b, unit), chain, f"{seed}/budget{b:g}", gen,  # type: ignore[arg-type]
+                           start=start.rules)
+        found = {rules for _, rules in res.hall.by_degree.values()} | {res.best}
+        pool += [_entry(scorer, rules, f"budget{b:g}") for rules in found]
+    rows = []
+    for b in sorted(budgets):
+        e = best_within(pool, b)
+        assert e is not None  # silence (degree 0) is within every budget
+        rows.append({"budget": b, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree, "max_in": e.max_in,
+                     "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source})
+    return rows
