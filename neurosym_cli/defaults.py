@@ -16,6 +16,8 @@ KEYS = {"task": "NEUROSYM_TASK", "budget": "NEUROSYM_BUDGET"}
 """the config groups that take a persistent default -> their environment variable"""
 FILES = ("neurosym.yaml", ".neurosym.yaml")
 """project files looked for in the working directory"""
+MAX_BYTES = 1_000_000
+"""the largest project file read: it holds two names; anything near this size is another file under its name"""
 SOURCES_ENV = "NEUROSYM_DEFAULTS_FROM"
 """set by the console script for the command's process: 'task=<where>;budget=<where>' of the defaults it applied"""
 
@@ -36,6 +38,14 @@ def read_project_file(path: Path) -> dict[str, str]:
     """``{"task": ..., "budget": ...}`` of a project file (either may be absent); one line for anything else."""
     import yaml
 
+    try:
+        size = path.stat().st_size
+    except OSError as e:
+        raise DefaultsError(f"cannot read the defaults file {path} ({e.strerror or e})") from None
+    if size > MAX_BYTES:  # YAML of that size takes minutes and gigabytes to parse, for two names
+        raise DefaultsError(f"the defaults file {path} holds {size / 1e6:.1f} MB, more than the "
+                            f"{MAX_BYTES // 1000} kB a defaults file may; it holds lines like `task: random-grid` and "
+                            "`budget: tiny` (is it the file you meant?)")
     try:
         data = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:

@@ -166,9 +166,12 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
     overrides = list(hc.overrides.task)
     stamp: dict[str, Any] = {}
     if sweep:  # stamped with the sweep's id; written first, so a job killed mid-run reads as failed, not as stale
-        from ..utils.io import write_json
+        from ..utils.io import confine, write_json
         from .sweep import job_sweep_id
 
+        # jobs of one sweep share this process: the previous job's confinement (its own Hydra directory) must not
+        # refuse this job's record when the sweep directory lies outside the runs root
+        confine([hc.runtime.output_dir])
         stamp = {"job": hc.job.num, "overrides": overrides, "sweep": job_sweep_id(Path(hc.runtime.output_dir))}
         write_json(record, {"ok": False, **stamp,
                             "error": f"no result (it crashed or was killed; see {hc.runtime.output_dir})"})

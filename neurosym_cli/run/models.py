@@ -21,7 +21,15 @@ def scheme_provider(cfg: RunConfig, task=None, *, scheme: "BaselineConfig | None
     directory (or ``program=``); ``task``: the task, for a scheme whose rule needs it when built."""
     scheme = scheme or cfg.baseline
     file = RunDir(cfg).artifact_file(scheme)  # only a scheme that runs under a program or tree takes one
-    return scheme.provider(cfg, task) if file is None else scheme.provider(cfg, task, artifact=file)
+    if file is None:
+        return scheme.provider(cfg, task)
+    comm = scheme.provider(cfg, task, artifact=file)
+    if scheme.has_program and not cfg.program:  # the run's own program: never without its search's summary
+        from ..policy.protocol import unwrap
+        from .summary import check_synthesized
+
+        check_synthesized(file, unwrap(comm).program, scheme.command("synth", cfg))
+    return comm
 
 
 def baseline_comm(cfg: RunConfig, task=None, *, scheme: "BaselineConfig | None" = None) -> CommProvider:

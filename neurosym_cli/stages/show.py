@@ -4,20 +4,20 @@ terms of its search when known. Reads text and the task's feature declarations o
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from rich.panel import Panel
 from rich.table import Table
 
-from ..config import ConfigError, RunConfig
+from ..config import ConfigError, RunConfig, UserError
 from ..run import RunDir, synth_command
-from ..run.layout import FRONT, SUMMARY
+from ..run.layout import FRONT
+from ..run.summary import read_matching, summary_beside
 from ..degrees import objective_form, objective_legend, objective_term
 from ..dsl.ast import Program, rule_features
 from ..dsl.vocabulary import FeatureSet
 from ..dsl.printer import describe, rule_text
-from ..utils.console import console
+from ..utils.console import console, log
 from ..dsl.files import load_program
 from .front import print_front, read_front
 
@@ -35,8 +35,13 @@ def _stats(info, n_rules: int) -> list[dict] | None:
     """The rule statistics of a summary's round, when they are there and fit the program's rules."""
     stats = info.get("rule_stats") if isinstance(info, dict) else None
     ok = isinstance(stats, list) and len(stats) == n_rules and all(
-        isinstance(x, dict) and {"fires", "edge_share", "removal_delta", "flags"} <= set(x) for x in stats)
+        isinstance(x, dict) and all(_number(x.get(k)) for k in ("fires", "edge_share", "removal_delta"))
+        and isinstance(x.get("flags"), list) for x in stats)
     return stats if ok else None
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
 
 
 def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: float | None,
@@ -84,7 +89,8 @@ def render(program: Program, vocab: FeatureSet, rounds: list[dict] | None, lam: 
                 sub = ""  # a summary of another shape: the rules are still worth showing
         name = f"{title}, round {r + 1}" if program.n_rounds > 1 else title
         console.print(Panel(t, title=name, subtitle=sub or None, expand=False))
-        for line in (info or {}).get("simplified", []) if isinstance(info, dict) else []:
+        simplified = info.get("simplified") if isinstance(info, dict) else None
+        for line in simplified if isinstance(simplified, list) else []:
             console.print(f"[dim]simplified after the search:[/] {line}")
         hall = info.get("hall_of_fame") if isinstance(info, dict) else None
         if isinstance(hall, dict):
@@ -102,7 +108,7 @@ def hall_of_fame(hall: dict, lam: float | None, name: str, objective: str = "pap
                                     "level's")}
     for by, (head, why) in heads.items():
         rows = hall.get(by)
-        if not isinstance(rows, list) or not rows:
+        if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
             continue
         t = Table(title=f"hall of fame by {by}: {name}", caption=why, header_style="bold")
         for c in (head, "objective", "L1", term, "program", ""):
@@ -114,6 +120,21 @@ def hall_of_fame(hall: dict, lam: float | None, name: str, objective: str = "pap
             except (KeyError, TypeError, ValueError):
                 return  # a summary of another shape: the program above stands
         console.print(t)
+
+
+def _objective(meta: dict, default: str) -> str:
+    """The synth.objective a summary's search ran under (it names the degree term), or ``default`` when the
+    summary does not say one neurosym knows."""
+    config = meta.get("config")
+    synth = config.get("synth") if isinstance(config, dict) else None
+    objective = synth.get("objective") if isinstance(synth, dict) else None
+    if not isinstance(objective, str):
+        return default
+    try:
+        objective_term(objective)
+    except UserError:
+        return default
+    return objective
 
 
 def show_program(cfg: RunConfig) -> dict:
@@ -128,16 +149,13 @@ def show_program(cfg: RunConfig) -> dict:
     fmap = feature_map(cfg)
     check_program(program, cfg, str(path), fmap)  # the features of this task only, as eval would insist
     rounds, lam, objective = None, None, cfg.synth.objective
-    summary = path.parent / SUMMARY  # beside the program: a hand-written one has none
-    if summary.is_file():
-        try:
-            meta = json.loads(summary.read_text())
-            rounds, lam = meta.get("rounds"), meta.get("lam")
-            objective = str(((meta.get("config") or {}).get("synth") or {}).get("objective", objective))
-        except (OSError, ValueError, AttributeError):
-            pass
-    if not isinstance(rounds, list) or not isinstance(lam, (int, float)):
-        rounds, lam = None, None
+    meta, why = read_matching(path, program)
+    if meta is not None:
+        rounds, lam = meta["rounds"], meta.get("lam") if _number(meta.get("lam")) else None
+        objective = _objective(meta, objective)
+    elif not cfg.program or summary_beside(path).exists():  # a file of the user's own need not have one
+        again = "" if cfg.program else f"; `{synth_command(cfg)} overwrite=true` searches it again"
+        log.warning("%s %s: its rules are shown without their objective terms%s", path, why, again)
     render(program, fmap.vocab, rounds, lam, title=str(Path(path)), objective=objective)
     front = path.parent / FRONT  # synth.front=true wrote one beside the program
     if front.is_file():

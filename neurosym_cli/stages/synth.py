@@ -15,6 +15,7 @@ from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
 from ..run import RunDir, synth_command, train_command
 from ..run.checkpoints import open_checkpoint, policy_from_payload
+from ..run.summary import is_program_summary
 from ..run.layout import PROGRAM, TREE
 from ..tasks import make_task
 from ..synth.dataset import DataBucket, load_or_collect, subsample
@@ -62,19 +63,11 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
         return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device)
 
 
-def _program_summary(rec: object) -> bool:
-    """Whether a record is a program search's summary.json: every round with its objective terms and time."""
-    rounds = rec.get("rounds") if isinstance(rec, dict) else None
-    return isinstance(rounds, list) and bool(rounds) and all(
-        isinstance(r, dict) and all(isinstance(r.get(k), (int, float)) and not isinstance(r.get(k), bool)
-                                    for k in ("objective", "l1", "degree", "seconds")) for r in rounds)
-
-
 def read_summary(cfg: RunConfig) -> dict:
     """summary.json of ``cfg``'s program search, of the shape ``search_program`` writes; else one line naming the
     command that searches it again."""
     return read_json(RunDir(cfg).summary_file, f"{synth_command(cfg)} overwrite=true",
-                     _program_summary)
+                     is_program_summary)
 
 
 def _terms(summary: Path) -> dict:
@@ -162,8 +155,10 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     form = objective_form(cfg.synth.objective)
     header += [f"round {x['round']}: objective {x['objective']:.4f} = "
                f"{form.formula(x['l1'], x['degree'], cfg.lam, x.get('scale', (1.0, 1.0)))}" for x in rounds]
-    rd.front_file.unlink(missing_ok=True)  # a front belongs to the search that made it
-    save_program(rd.program_file, to_text(program), header)
+    # one unit, the program last (run/summary.py): a Ctrl-C between the writes leaves a summary without a program
+    # (synth searches again), never a program without its summary or beside another search's
+    _drop(rd.program_file)
+    _drop(rd.front_file)  # a front belongs to the search that made it
     write_csv(rd.trace_file, trace)
     write_json(rd.summary_file, {
         "command": "synth", "version": __version__, "task": cfg.task.name, "tag": tag,
@@ -172,6 +167,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         "dataset_states": sum(b.states for b in data), "rounds": rounds, "program": to_text(program),
         "runtime": runtime(), "config": cfg.record(),
     })
+    save_program(rd.program_file, to_text(program), header)
     say(f"[green]synthesized[/] {rd.program_file}")
     if fronts:
         write_front(rd.front_file, cfg, tag, fronts)
@@ -180,6 +176,17 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
         render(program, env.features(cfg.features).vocab, rounds, cfg.lam, objective=cfg.synth.objective)
     return {"program": str(rd.program_file), "objective": sum(x["objective"] for x in rounds),
             "l1": sum(x["l1"] for x in rounds), "degree": sum(x["degree"] for x in rounds)}
+
+
+def _drop(result: Path) -> None:
+    """Remove the result an overwrite replaces before its new summary is written: a Ctrl-C before the new result
+    is in place must not leave the old one beside the new search's summary."""
+    try:
+        result.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError as e:
+        raise UserError(f"cannot replace {result}: {e.strerror or e}") from None
 
 
 def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
@@ -220,10 +227,11 @@ def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket]
                  fit_info["validation_accuracy"][fit_info["depth"]], len(tree.left))
     rd = RunDir(cfg)
     tree_file = rd.artifact_file()
-    write_json(tree_file, {"rounds": [t.to_dict() for t in trees]})
+    _drop(tree_file)  # the summary first and the tree last, as a program's (search_program)
     write_json(rd.summary_file, {"command": "synth", "version": __version__, "task": cfg.task.name,
                                  "tag": rd.program_tag, "rules": cfg.rules, "rounds": rounds,
                                  "runtime": runtime(), "config": cfg.record()})
+    write_json(tree_file, {"rounds": [t.to_dict() for t in trees]})
     say(f"[green]fitted[/] {tree_file}")
     return {"tree": str(tree_file)}
 

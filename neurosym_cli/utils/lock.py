@@ -8,6 +8,7 @@ manifest. The lock dies with its process (kill -9 included), so a crashed run ne
 from __future__ import annotations
 
 import os
+import shlex
 import sys
 from contextlib import contextmanager
 from pathlib import Path
@@ -29,9 +30,13 @@ def run_lock(directory: Path) -> Iterator[None]:
     check_inside(directory)
     made = [d for d in (directory, *directory.parents) if not d.exists()]  # deepest first
     held = False
+    lock = directory / ".lock"
     try:
         directory.mkdir(parents=True, exist_ok=True)
-        fd = os.open(directory / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+    except IsADirectoryError:  # the lock's name is taken by a directory (made by hand, or a copy gone wrong)
+        raise ArtifactError(f"{lock} is a directory, not the lock file neurosym keeps there; move it away "
+                            f"(or `rmdir {shlex.quote(str(lock))}` when empty) and run again") from None
     except OSError as e:
         e.filename = e.filename or str(directory)
         raise ArtifactError(resource_problem(e) or f"cannot write to {directory}: {e.strerror or e}") from None
