@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 from .ast import And, ArgMaxRule, Cond, Linear, Or, RandomRule, Rule, Test, TrueCond
 
@@ -171,7 +172,13 @@ def propose(rules: tuple[Rule, ...], space: SearchSpace, rng: random.Random) -> 
 # ------------------------------------------------------------------------------- the full neighbourhood
 def grid(space: SearchSpace, name: str, sign: float) -> tuple[float, ...]:
     """The thresholds a test ``sign * name >= c`` can take on the quantile grid, ascending (world units)."""
-    return tuple(sorted({_r2(sign * q) for q in space.quantiles[name]}))
+    return _grid(tuple(space.quantiles[name]), sign)
+
+
+@lru_cache(maxsize=4096)
+def _grid(quantiles: tuple[float, ...], sign: float) -> tuple[float, ...]:
+    # cached: every neighbourhood and fitting pass asks for the same few grids thousands of times
+    return tuple(sorted({_r2(sign * q) for q in quantiles}))
 
 
 def _rank(values: tuple[float, ...], c: float) -> int:
