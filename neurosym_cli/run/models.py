@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from ..config import ConfigError, RunConfig
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..utils.io import ArtifactError
-from .commands import retrain_command, train_command
+from .commands import missing_chain, retrain_command, train_command
 from .layout import RunDir
 
 if TYPE_CHECKING:
@@ -103,6 +103,9 @@ def load_baseline(cfg: RunConfig, device, task=None) -> tuple[Any, Any, CommProv
         raise ConfigError(f"program= is for the baselines that run under a program "
                           f"({', '.join(n for n, b in SCHEMES.items() if b.has_program)}); {cfg.baseline.name} runs "
                           "under none: leave program= out")
+    chain = missing_chain(cfg)  # every stage not run yet at once, not the one just before
+    if chain:
+        raise ArtifactError(chain)
     model_file = RunDir(cfg).model_file
     payload = open_checkpoint(cfg)
     if task is None:  # the run's own task: it must be the one trained on (`stress` varies it on purpose)

@@ -37,6 +37,27 @@ def record(cfg: RunConfig, episode: int | None = None) -> tuple[EpisodeRecord, s
     return rec, title
 
 
+def check_episode(cfg: RunConfig) -> None:
+    """Refuse an ``episode=`` beyond the evaluation protocol's (``budget.eval_seeds`` seeds of the task's test
+    episodes each): it was drawn from seeds no evaluation ran, without a word."""
+    per_seed = len(cfg.task.test_settings) or cfg.task.eval_episodes
+    total = per_seed * cfg.budget.eval_seeds
+    if cfg.episode >= total:
+        raise ConfigError(f"episode={cfg.episode} is beyond the evaluation's {total} episodes ({cfg.budget.eval_seeds} "
+                          f"seeds of {per_seed}); choose episode=0..{total - 1}")
+
+
+def check_in_episode(cfg: RunConfig, rec: EpisodeRecord) -> None:
+    """Refuse ``render.agent`` and ``render.step`` beyond the episode drawn (they were clamped to its last agent
+    and step, without a word)."""
+    if cfg.render.agent >= rec.n_agents:
+        raise ConfigError(f"render.agent={cfg.render.agent}, but episode {cfg.episode} has {rec.n_agents} agents; "
+                          f"choose render.agent=0..{rec.n_agents - 1}")
+    if cfg.render.step >= rec.steps:
+        raise ConfigError(f"render.step={cfg.render.step}, but episode {cfg.episode} has {rec.steps} steps; choose "
+                          f"render.step=0..{rec.steps - 1}")
+
+
 def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym render`: <exp_dir>/render/<label>/episode<k>.gif (or .mp4), episode<k>.png (the whole episode)
     and episode<k>-frames.png (four frames of the animation); with render.window=[x0,x1,y0,y1] (a zoom) the names
@@ -46,6 +67,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
 
     if cfg.render.round > cfg.task.rounds:
         raise ConfigError(f"render.round={cfg.render.round}, but {cfg.task.name} has {cfg.task.rounds} round(s)")
+    check_episode(cfg)
     rec, title = record(cfg)
     window = cfg.render.window
     if window is not None and not window_receivers(rec, window).any():  # no agent ever enters it
@@ -59,8 +81,9 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
     try:
         anim, frames = animate(rec, out / f"{stem}.{cfg.render.format}", title + round_note, style,
-                               cfg.render.every, cfg.render.fps, cfg.render.trail, cfg.render.round - 1,
-                               cfg.render.crowd_from, cfg.render.receivers, cfg.seed,
+                               every=cfg.render.every, fps=cfg.render.fps, trail=cfg.render.trail,
+                               round_=cfg.render.round - 1, crowd_from=cfg.render.crowd_from,
+                               receivers=cfg.render.receivers, seed=cfg.seed,
                                stills=out / f"{stem}-frames.png", window=window)
     except FileNotFoundError as e:
         raise ConfigError(str(e)) from None
@@ -109,6 +132,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     (two-groups-cross), rule regions of the program (render.agent=), Figure 5 (unlabeled-goals)."""
     from ..viz import figures as fig
 
+    check_episode(cfg)
     out = RunDir(cfg).figures_dir
     head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
     made: dict[str, str] = {}
@@ -116,6 +140,10 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     task = make_task(cfg.task, cfg.horizon)
     tag = RunDir(_with_baseline(cfg, "prog")).program_tag  # the pictures of programs name the program they show
     recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
+    # the program's rules, drawn on the episode of the retrained model (else of the oracle under the program)
+    prog = _records(cfg, ["prog-retrained"], cfg.episode) or _records(cfg, ["prog"], cfg.episode)
+    if recs or prog:  # before anything is drawn
+        check_in_episode(cfg, (recs or prog)[0][1])
     if recs:
         made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-{tag}-episode{cfg.episode}.png",
                                                    f"{head}: attention at episode {cfg.episode}"))
@@ -135,19 +163,17 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
         if full and prog:
             made["figure1"] = str(fig.figure1(full[0], prog[0], out / f"figure1-{tag}.png",
                                               f"{head}: Figure 1, episode {settings[0]}"))
-    # the program's rules, drawn on the episode of the retrained model (else of the oracle under the program)
-    prog = _records(cfg, ["prog-retrained"], cfg.episode) or _records(cfg, ["prog"], cfg.episode)
     if prog:
         prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
         label, rec = prog[0]
         comm = unwrap(baseline_comm(prog_cfg, task))  # the program under any link failure
         program = comm.program  # type: ignore[attr-defined]
-        agent = min(cfg.render.agent, rec.n_agents - 1)
+        agent = cfg.render.agent  # within the episode (check_in_episode)
         for r in range(program.n_rounds):
             name = f"rules-{tag}-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
             made[f"rules{r + 1}"] = str(fig.rule_regions(
-                program, comm.fmap, task.pair_dim, rec, agent, min(step, rec.steps - 1), r, out / name,
-                f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
+                program, comm.fmap, task.pair_dim, rec, agent=agent, step=step, round_=r, path=out / name,
+                title=f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
         if not rec.labelled:  # a shared goal set: the paper's Figure 5 (unlabeled goals)
             made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-{tag}-episode{cfg.episode}.png",
                                                       f"{head}: Figure 5, episode {cfg.episode}"))

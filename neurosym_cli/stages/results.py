@@ -288,7 +288,13 @@ def _what_makes(cfg: RunConfig, root: Path) -> str:
     from ..tasks.registry import task_choices
 
     if not cfg.report_dir:
-        return f"run `neurosym pipeline {run_args(cfg)}` (or `neurosym eval ...`) first"
+        make = f"run `neurosym pipeline {run_args(cfg)}` (or `neurosym eval ...`) first"
+        others = _reports_here(cfg)
+        if not others:
+            return make
+        return ("the runs root holds others: " + ", ".join(f"`{line}`" for line in others[:3])
+                + (f" and {len(others) - 3} more" if len(others) > 3 else "")
+                + f"; for {cfg.task.name} ({cfg.budget.name} budget) {make}")
     path = root.absolute()
     seed = re.fullmatch(r"seed(\d+)", path.name)
     run = path.parent if seed else path  # <runs root>/<task>/<budget>
@@ -302,6 +308,25 @@ def _what_makes(cfg: RunConfig, root: Path) -> str:
         return f"run `{line}` (or `neurosym eval ...`) first"
     return ("report_dir= names a directory of run directories (<runs_root>/<task>/<budget>, holding seed<k>/eval/), "
             "or one seed<k> directory of it; `neurosym pipeline` writes their evaluations")
+
+
+def _reports_here(cfg: RunConfig) -> list[str]:
+    """The `neurosym report` line of every (task, budget) that holds evaluations in ``cfg``'s runs root
+    (<runs_root>/<task>[-fail<p>]/<budget>/seed<k>/eval/<label>/metrics.json), in name order: what a bare
+    `neurosym report` of the default task should point at instead of running that task."""
+    import re
+
+    from ..baselines import runs_root_arg
+
+    root = Path(cfg.runs_root)
+    found = sorted({(m.parents[4].name, m.parents[3].name)
+                    for m in root.glob("*/*/seed*/eval/*/metrics.json") if m.is_file()})
+    lines = []
+    for task_dir, budget in found:
+        task, fail = re.fullmatch(r"(.+?)(?:-fail([0-9.e-]+))?", task_dir).groups()  # type: ignore[union-attr]
+        lines.append(f"neurosym report task={task} budget={budget}" + (f" task.link_failure={fail}" if fail else "")
+                     + runs_root_arg(cfg))
+    return lines
 
 
 def _rows_for_figures(s) -> Rows:

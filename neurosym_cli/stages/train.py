@@ -20,6 +20,7 @@ from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module
 from ..run import RunDir, train_command
 from ..run.checkpoints import checkpoint_bytes, load_checkpoint, open_checkpoint, policy_from_payload, policy_payload
+from ..run.commands import missing_chain
 from ..run.models import baseline_comm, check_memory, comm_identity, load_gate
 from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
@@ -118,6 +119,9 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.baseline.weights().verb != "retrain":
         raise ConfigError(f"retrain makes baseline=prog-retrained, det-prog-retrained or dt-retrained, "
                           f"not {cfg.baseline.name}")
+    chain = missing_chain(cfg, "retrain")  # the oracle and the program both missing: both named at once
+    if chain:
+        raise ArtifactError(chain)
     env = make_task(cfg.task, cfg.horizon)
     seed_everything(cfg.seed)  # as in train: whatever the provider draws comes from the seed
     comm = baseline_comm(cfg, env)
