@@ -63,7 +63,7 @@ def step_seconds(task: TaskConfig, comm, episodes: int, horizon: int, repeats: i
     best = float("inf")
     for _ in range(repeats + 1):  # the first is a warm-up
         t0 = time.perf_counter()
-        traj = rollout(env, pol, comm, bucket, rng, horizon, task.detach_state, stats=False)
+        traj = rollout(env, pol, comm, bucket, rng, horizon, detach_state=task.detach_state, stats=False)
         traj.cost.sum().backward()
         best = min(best, time.perf_counter() - t0)
     return best

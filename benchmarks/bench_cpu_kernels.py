@@ -59,8 +59,8 @@ def child(a: argparse.Namespace) -> None:
 
     spec = FitSpec(rollouts=a.batch * (a.steps + 1), batch=a.batch, horizon=a.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(step_per_bucket=False))
-    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), torch.device("cpu"), Clock(),
-        lambda s: None)
+    fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=torch.device("cpu"), reporter=Clock(),
+        save=lambda s: None)
     # the first step warms up (allocations, caches), so the steps timed run from its end
     wall = [b[0] - a_[0] for a_, b in zip(stamps, stamps[1:])]
     cpu_s = [b[1] - a_[1] for a_, b in zip(stamps, stamps[1:])]

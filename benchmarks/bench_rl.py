@@ -33,7 +33,7 @@ def step(env, pol, comm, bucket, rng, horizon: int, detach: bool) -> float:
     """Seconds of one training step (rollout, loss, backward)."""
     discount = torch.ones(horizon)
     t0 = time.perf_counter()
-    traj = rollout(env, pol, comm, bucket, rng, horizon, detach, stats=False)
+    traj = rollout(env, pol, comm, bucket, rng, horizon, detach_state=detach, stats=False)
     loss = traj.cost.sum()
     if traj.logp is not None:
         loss = loss + score_function_loss(traj.cost, traj.comm_degree, traj.logp, discount, 0.1, True)

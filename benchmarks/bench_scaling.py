@@ -55,10 +55,12 @@ def measure(n: int, threads: int) -> dict:
 
     batch = 4
     spec = FitSpec(rollouts=batch, batch=batch, horizon=50, checkpoint_every=10**9)
-    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)  # warm-up
+    fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=cpu,
+        reporter=Quiet(), save=lambda s: None)  # warm-up
     spec = FitSpec(rollouts=3 * batch, batch=batch, horizon=50, checkpoint_every=10**9)
     t0 = time.perf_counter()
-    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), cpu, Quiet(), lambda s: None)
+    fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=cpu,
+        reporter=Quiet(), save=lambda s: None)
     train_s = (time.perf_counter() - t0) / spec.rollouts
     out.update(train_rollouts_per_s=1 / train_s, train_agent_steps_per_s=n * 50 / train_s)
 

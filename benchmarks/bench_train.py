@@ -62,7 +62,8 @@ def train_rate(batch: int, rollouts: int, lr: float, lr_final: float, clip: floa
     spec = FitSpec(rollouts=rollouts, batch=batch, horizon=env.horizon, checkpoint_every=10**9,
                    optim=OptimConfig(lr=lr, lr_final=lr_final, grad_clip=clip, step_per_bucket=True))  # with one rollout per step: one bucket
     t0 = time.perf_counter()
-    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), DEVICE, Quiet(), lambda s: None)
+    fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=DEVICE,
+        reporter=Quiet(), save=lambda s: None)
     if DEVICE.type == "cuda":
         torch.cuda.synchronize()
     return rollouts / (time.perf_counter() - t0), pol

@@ -55,8 +55,9 @@ def main() -> None:
         setting = f", test setting {names[k % len(names)]}" if names else ""
         for r in range(program.n_rounds):
             out = f"{a.out}/{a.task}-rules-{tag}-episode{k}" + (f"-round{r + 1}" if program.n_rounds > 1 else "")
-            path = rule_regions(program, comm.fmap, env.pair_dim, rec, a.agent, 0, r, Path(f"{out}.png"),
-                                f"{a.task} (paper budget, train seed 0): rules of {tag}, episode {k}{setting}")
+            path = rule_regions(program, comm.fmap, env.pair_dim, rec, agent=a.agent, step=0, round_=r,
+                                path=Path(f"{out}.png"),
+                                title=f"{a.task} (paper budget, train seed 0): rules of {tag}, episode {k}{setting}")
             print(f"drew {path}")
 
 

@@ -57,7 +57,8 @@ def main() -> None:
                 print(f"[{tag}] {m['rollouts']:6d} rollouts  loss {m['loss']:8.2f}  {time.perf_counter() - t0:5.0f} s",
                       flush=True)
 
-    fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), dev, Rep(), lambda s: None)
+    fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=dev,
+        reporter=Rep(), save=lambda s: None)
     wall = time.perf_counter() - t0
     s = summarize(evaluate(env, pol, FullComm(), range(20), dev))["cost"]
     print(f"[{tag}] FINAL eval loss {s['mean']:.2f} ± {s['std']:.2f}  train wall {wall:.0f} s", flush=True)

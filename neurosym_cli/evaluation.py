@@ -45,7 +45,7 @@ def evaluate(
     with torch.no_grad():
         for bucket, bkeys in group_by_agents(states, keys):
             rng = Rng([g for _, g in bkeys], device)
-            traj = rollout(env, policy, comm, bucket.to(device), rng, env.horizon, detach_state)
+            traj = rollout(env, policy, comm, bucket.to(device), rng, env.horizon, detach_state=detach_state)
             per_ep = traj.episode_metrics()
             for e, (s, _) in enumerate(bkeys):
                 counts[s] += 1

@@ -62,9 +62,9 @@ def rollout(
     state: TaskState,
     rng: Rng,
     horizon: int,
+    *,
     detach_state: bool = False,
     stats: bool = True,
-    *,
     record: Recorder | None = None,
 ) -> Trajectory:
     """Run ``horizon`` steps (``step.step``) from ``state``. Gradients flow through the dynamics unless

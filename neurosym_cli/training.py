@@ -100,6 +100,7 @@ def fit(
     env: Task,
     comm: CommProvider,
     spec: FitSpec,
+    *,
     gen: torch.Generator,
     device: torch.device,
     reporter: Reporter,
@@ -144,7 +145,8 @@ def fit(
         if spec.optim.step_per_bucket and spec.optim.min_steps_per_batch > 1:
             buckets = split_buckets(buckets, spec.optim.min_steps_per_batch)
         for bucket in buckets:
-            traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, spec.detach_state, stats=False)
+            traj = rollout(env, policy, comm, bucket.to(device), rng, spec.horizon, detach_state=spec.detach_state,
+                           stats=False)
             denom = bucket.batch if spec.optim.step_per_bucket else batch
             loss = (traj.cost * discount[:, None]).sum() / (denom * spec.horizon)
             if traj.logp is not None:  # decisions as actions: + the score-function term of their cost

@@ -112,11 +112,11 @@ def test_corrupt_dataset_is_collected_again(tmp_path):
     pol = CommTransformer(env.obs_dim, env.action_dim, 1, ModelConfig())
     path = tmp_path / "dataset.pt"
     path.write_bytes(b"\x80\x04garbage")
-    data = load_or_collect(path, "neurosym synth", env, pol, 2, 2, torch.Generator().manual_seed(0),
-                           torch.device("cpu"))
+    data = load_or_collect(path, "neurosym synth", env, pol, rollouts=2, stride=2,
+                           gen=torch.Generator().manual_seed(0), device=torch.device("cpu"))
     assert data and sum(b.states for b in data) == 2 * 2  # 2 rollouts, every 2nd of 4 steps
-    again = load_or_collect(path, "neurosym synth", env, pol, 2, 2, torch.Generator().manual_seed(5),
-                            torch.device("cpu"))
+    again = load_or_collect(path, "neurosym synth", env, pol, rollouts=2, stride=2,
+                            gen=torch.Generator().manual_seed(5), device=torch.device("cpu"))
     assert torch.equal(again[0].target, data[0].target)  # reused, not collected with the other generator
 
 

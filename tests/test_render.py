@@ -95,7 +95,7 @@ def test_rule_regions_equal_the_evaluators_filter():
     s_i = np.array([1.5, -2.0], dtype=np.float32)  # x - g: the goal vector is (-1.5, 2.0), gd = 2.5
     origin = np.array([0.3, -0.4])
     xs, ys = np.linspace(-4, 4, 23), np.linspace(-3, 5, 19)
-    regions = rule_grid(program, 0, feature_map("formation"), 2, s_i, origin, xs, ys)
+    regions = rule_grid(program, 0, feature_map("formation"), pair_dim=2, agent_input=s_i, origin=origin, xs=xs, ys=ys)
     gx, gy = np.meshgrid(xs, ys)
     pts = torch.tensor(np.stack([gx.ravel(), gy.ravel()], -1), dtype=torch.float32)
     n = 1 + len(pts)  # one real bucket: the asking agent and an agent at every grid point
@@ -202,7 +202,7 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
     state, gen, _ = protocol_episode(env, 0)
     rec = record_episode(env, policy, _program(), state, gen, torch.device("cpu"))
     assert rec.n_agents == 300 and rec.steps == 3
-    scene = CrowdScene(rec, "test: swarm", "rules", 0, 2, receivers=25, seed=1)
+    scene = CrowdScene(rec, "test: swarm", "rules", round_=0, trail=2, receivers=25, seed=1)
     try:
         assert len(scene.recv) == 25 and len(set(scene.recv.tolist())) == 25
         for t in range(4):
@@ -218,7 +218,7 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
     lo, hi = rec.pos[0].min(0), rec.pos[0].max(0)
     mid = (lo + hi) / 2
     window = [float(lo[0]), float(mid[0]), float(lo[1]), float(hi[1])]
-    scene = CrowdScene(rec, "test: swarm", "rules", 0, 2, receivers=25, seed=1, window=window)
+    scene = CrowdScene(rec, "test: swarm", "rules", round_=0, trail=2, receivers=25, seed=1, window=window)
     try:
         assert scene.ax.get_xlim() == pytest.approx(window[:2]) and scene.ax.get_ylim() == pytest.approx(window[2:])
         inside = rec.pos[0, scene.recv]

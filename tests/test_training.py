@@ -33,7 +33,8 @@ def test_loss_falls_on_a_small_case():
     comm = FullComm()
     before = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
     spec = FitSpec(rollouts=16 * 25, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3))
-    state = fit(pol, env, comm, spec, torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
+    state = fit(pol, env, comm, spec, gen=torch.Generator().manual_seed(0), device=torch.device("cpu"),
+                reporter=Quiet(), save=lambda s: None)
     after = summarize(evaluate(env, pol, comm, range(4), torch.device("cpu")))["cost"]["mean"]
     assert state.step == 25
     first = sum(h["loss"] for h in state.history[:3]) / 3
@@ -48,7 +49,8 @@ def test_resume_reproduces_an_uninterrupted_run():
     spec = FitSpec(rollouts=4 * 4, batch=4, horizon=10, checkpoint_every=2)
     comm = FullComm()
     straight = _policy(env)
-    fit(straight, env, comm, spec, torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
+    fit(straight, env, comm, spec, gen=torch.Generator().manual_seed(1), device=torch.device("cpu"),
+        reporter=Quiet(), save=lambda s: None)
 
     resumed = _policy(env)
     saved = {}
@@ -59,13 +61,16 @@ def test_resume_reproduces_an_uninterrupted_run():
             saved["weights"] = copy.deepcopy(resumed.state_dict())
 
     half = FitSpec(**{**spec.__dict__})
-    fit(resumed, env, comm, half, torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), save)
+    fit(resumed, env, comm, half, gen=torch.Generator().manual_seed(1), device=torch.device("cpu"), reporter=Quiet(),
+        save=save)
     # "crash" after step 2: rebuild from what the checkpoint held and continue with a fresh generator object
     fresh = _policy(env)
     fresh.load_state_dict(saved["weights"])
     torch.manual_seed(123)  # the global RNG is restored from the checkpoint, whatever it is now
     st: FitState = saved["state"]
-    fit(fresh, env, comm, spec, torch.Generator().manual_seed(999), torch.device("cpu"), Quiet(), lambda s: None, st)
+    fit(fresh, env, comm, spec, gen=torch.Generator().manual_seed(999), device=torch.device("cpu"),
+        reporter=Quiet(), save=lambda s: None,
+        state=st)
     for k, v in straight.state_dict().items():
         assert torch.allclose(v, fresh.state_dict()[k], atol=1e-6), k
 
@@ -76,7 +81,7 @@ def test_step_per_bucket_takes_one_adam_step_per_bucket():
     gen = torch.Generator().manual_seed(0)
     spec = FitSpec(rollouts=24, batch=24, horizon=5, optim=OptimConfig(step_per_bucket=True))
     n_buckets = len(env.reset(24, torch.Generator().manual_seed(0)))
-    st = fit(pol, env, FullComm(), spec, gen, torch.device("cpu"), Quiet(), lambda s: None)
+    st = fit(pol, env, FullComm(), spec, gen=gen, device=torch.device("cpu"), reporter=Quiet(), save=lambda s: None)
     adam_steps = int(next(iter(st.optimizer["state"].values()))["step"])
     assert st.step == 1 and adam_steps == n_buckets > 1
 
@@ -92,11 +97,11 @@ def test_retraining_under_a_fixed_program_reduces_its_loss():
     pol = _policy(env)
     full = FullComm()
     fit(pol, env, full, FitSpec(rollouts=16 * 20, batch=16, horizon=30, optim=OptimConfig(lr=1e-2, lr_final=1e-3)),
-        torch.Generator().manual_seed(0), torch.device("cpu"), Quiet(), lambda s: None)
+        gen=torch.Generator().manual_seed(0), device=torch.device("cpu"), reporter=Quiet(), save=lambda s: None)
     prog = ProgramComm(parse("random(filter(d >= 3.0, l))\n"), env.features("v1"))
     before = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
     fit(pol, env, prog, FitSpec(rollouts=16 * 15, batch=16, horizon=30, optim=OptimConfig(lr=3e-3, lr_final=1e-3)),
-        torch.Generator().manual_seed(1), torch.device("cpu"), Quiet(), lambda s: None)
+        gen=torch.Generator().manual_seed(1), device=torch.device("cpu"), reporter=Quiet(), save=lambda s: None)
     after = summarize(evaluate(env, pol, prog, range(4), torch.device("cpu")))["cost"]["mean"]
     assert after < before, (before, after)
 
@@ -114,7 +119,7 @@ def test_min_steps_per_batch_splits_single_n_batches():
     for k, expect in ((1, 3), (4, 12)):
         pol = _policy(env)
         spec = FitSpec(rollouts=24, batch=8, horizon=5, optim=OptimConfig(min_steps_per_batch=k))
-        state = fit(pol, env, FullComm(), spec, torch.Generator().manual_seed(0), torch.device("cpu"),
-                    Quiet(), lambda s: None)
+        state = fit(pol, env, FullComm(), spec, gen=torch.Generator().manual_seed(0), device=torch.device("cpu"),
+                    reporter=Quiet(), save=lambda s: None)
         adam_steps = next(iter(state.optimizer["state"].values()))["step"]
         assert int(adam_steps) == expect

@@ -41,12 +41,13 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
     out = RunDir(cfg).eval_dir(label)
     label = label or RunDir(cfg).label
     with run_lock(out):
-        _write(cfg, info, out, label, rows, summary, seconds, cfg.baseline.rules(cfg, comm))
+        _write(cfg, info, out, label=label, rows=rows, summary=summary, seconds=seconds,
+               rules=cfg.baseline.rules(cfg, comm))
     log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
     return summary
 
 
-def _write(cfg: RunConfig, info: RunInfo, out, label: str, rows: list[dict], summary: dict, seconds: float,
+def _write(cfg: RunConfig, info: RunInfo, out, *, label: str, rows: list[dict], summary: dict, seconds: float,
            rules: int) -> None:
     write_together({out / METRICS_CSV: csv_bytes(rows), out / METRICS: json_bytes({
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,

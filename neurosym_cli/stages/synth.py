@@ -85,9 +85,10 @@ def collect_dataset(cfg: RunConfig):
     seed_everything(cfg.seed)
     policy = policy_from_payload(open_checkpoint(cfg, oracle=True)).to(device).eval()
     env = make_task(cfg.task, cfg.horizon)
-    data = load_or_collect(RunDir(cfg).dataset_file, synth_command(cfg), env, policy, cfg.budget.synth_rollouts,
-                           cfg.synth.stride, generator(cfg.seed, STREAM_SYNTH_DATA), device,
-                           train_command(cfg, oracle=True))
+    data = load_or_collect(RunDir(cfg).dataset_file, synth_command(cfg), env, policy,
+                           rollouts=cfg.budget.synth_rollouts, stride=cfg.synth.stride,
+                           gen=generator(cfg.seed, STREAM_SYNTH_DATA), device=device,
+                           oracle_by=train_command(cfg, oracle=True))
     return policy, env, data, device
 
 

@@ -73,7 +73,7 @@ def _kept(ckpt) -> str:
     return f"the last finite checkpoint (step {step}{'' if done else ', not marked trained'}) is kept at {ckpt}"
 
 
-def _manifest(cfg: RunConfig, info: RunInfo, out, verb: str, spec: FitSpec, state: FitState, seconds: float,
+def _manifest(cfg: RunConfig, info: RunInfo, out, *, verb: str, spec: FitSpec, state: FitState, seconds: float,
               rollouts: int, device) -> tuple[list[dict], float]:
     """manifest.json of a finished training; returns (the last steps' history, their mean loss)."""
     last = state.history[-5:]  # the last (up to) five optimizer steps: one step's loss is one batch's noise
@@ -107,10 +107,10 @@ def train(cfg: RunConfig, info: RunInfo) -> dict:
     comm = baseline_comm(cfg, env, scheme=maker)
     if maker.trains_from_oracle(cfg):  # from the oracle for budget.retrain_rollouts at the retraining rate
         payload = open_checkpoint(cfg, oracle=True)
-        return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
-                         lambda: policy_from_payload(payload), "train", lr=cfg.optim.retrain_lr)
-    return train_run(cfg, info, env, comm, cfg.budget.train_rollouts,
-                     lambda: CommTransformer.for_task(env, cfg.model), "train")
+        return train_run(cfg, info, env, comm, rollouts=cfg.budget.retrain_rollouts,
+                         init=lambda: policy_from_payload(payload), verb="train", lr=cfg.optim.retrain_lr)
+    return train_run(cfg, info, env, comm, rollouts=cfg.budget.train_rollouts,
+                     init=lambda: CommTransformer.for_task(env, cfg.model), verb="train")
 
 
 def retrain(cfg: RunConfig, info: RunInfo) -> dict:
@@ -126,12 +126,12 @@ def retrain(cfg: RunConfig, info: RunInfo) -> dict:
     seed_everything(cfg.seed)  # as in train: whatever the provider draws comes from the seed
     comm = baseline_comm(cfg, env)
     payload = open_checkpoint(cfg, oracle=True)
-    return train_run(cfg, info, env, comm, cfg.budget.retrain_rollouts,
-                     lambda: policy_from_payload(payload), "retrain", lr=cfg.optim.retrain_lr,
+    return train_run(cfg, info, env, comm, rollouts=cfg.budget.retrain_rollouts,
+                     init=lambda: policy_from_payload(payload), verb="retrain", lr=cfg.optim.retrain_lr,
                      made_under=comm_identity(cfg, comm))
 
 
-def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: int,
+def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, *, rollouts: int,
               init: Callable[[], CommTransformer], verb: str, lr: float | None = None,
               made_under: str | None = None) -> dict:
     """Resume the run directory's checkpoint or start from ``init()``, fit, save.
@@ -146,10 +146,11 @@ def train_run(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, rollouts: 
                    comm_cost=cfg.rl.cost, shaped=cfg.rl.shaped, comm_lr_scale=cfg.rl.lr_scale)
     out = RunDir(cfg).train_dir
     with run_lock(out):
-        return _train_locked(cfg, info, env, comm, init, verb, spec, device, out, made_under)
+        return _train_locked(cfg, info, env, comm, init=init, verb=verb, spec=spec, device=device, out=out,
+                             made_under=made_under)
 
 
-def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: Callable[[], CommTransformer],
+def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, *, init: Callable[[], CommTransformer],
                   verb: str, spec: FitSpec, device: torch.device, out, made_under: str | None = None) -> dict:
     run = RunDir(cfg)
     ckpt = run.model_file
@@ -171,7 +172,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
             log.info("already trained: %s (%d optimizer steps); nothing to do (overwrite=true retrains)", ckpt,
                      state.step)
             if not run.manifest_file.exists():  # the run ended before its manifest (a full disk): made now
-                _manifest(cfg, info, out, verb, spec, state, 0.0, 0, device)
+                _manifest(cfg, info, out, verb=verb, spec=spec, state=state, seconds=0.0, rollouts=0, device=device)
             return {"checkpoint": str(ckpt), "steps": state.step}
         kernels = payload["config"].get("cpu_kernels")
         if kernels is not None and kernels != cfg.cpu_kernels:  # steps of two kernel sets: a run neither would make
@@ -205,8 +206,8 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
     with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep, \
             open_tracker(cfg.logger, tb, steps_before) as tracker:
         try:
-            state = fit(policy, env, comm, spec, generator(cfg.seed, STREAM_TRAIN), device, Tracked(rep, tracker),
-                        save, state)
+            state = fit(policy, env, comm, spec, gen=generator(cfg.seed, STREAM_TRAIN), device=device,
+                        reporter=Tracked(rep, tracker), save=save, state=state)
         except ResumeMismatch as e:
             raise ArtifactError(f"{ckpt}: {e}; `{train_command(cfg)} overwrite=true` trains from the "
                                 "start") from None
@@ -219,7 +220,8 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, init: 
                               "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
     seconds = time.perf_counter() - t0
     rollouts = (state.step - steps_before) * spec.batch
-    last, final = _manifest(cfg, info, out, verb, spec, state, seconds, rollouts, device)
+    last, final = _manifest(cfg, info, out, verb=verb, spec=spec, state=state, seconds=seconds, rollouts=rollouts,
+                              device=device)
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "
         f"{seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")

@@ -90,7 +90,7 @@ def fingerprint(policy: CommTransformer) -> str:
     return h.hexdigest()
 
 
-def load_or_collect(path: Path, made_by: str, env: Task, policy: CommTransformer, rollouts: int, stride: int,
+def load_or_collect(path: Path, made_by: str, env: Task, policy: CommTransformer, *, rollouts: int, stride: int,
                     gen: torch.Generator, device: torch.device, oracle_by: str = "neurosym train") -> list[DataBucket]:
     """The dataset D at ``path`` when it was collected from these oracle weights, else collected and saved there
     (once per oracle, rollouts and stride: every synthesis run of a sweep reuses it). A D with a nan or inf is

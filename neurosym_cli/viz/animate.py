@@ -50,7 +50,7 @@ def _edges(rec: EpisodeRecord, t: int, r: int, style: str):
 class _Scene(BlitScene):
     """One figure whose artists are updated frame by frame (drawn once, then only moved: fast)."""
 
-    def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, size: float = 5.6,
+    def __init__(self, rec: EpisodeRecord, title: str, style: str, *, round_: int, trail: int, size: float = 5.6,
                  dpi: int = 90, window: list[float] | None = None):
         from matplotlib.collections import LineCollection
         from matplotlib.lines import Line2D
@@ -111,7 +111,7 @@ class _Scene(BlitScene):
                            f"colliding {int(hit.sum())}")
 
 
-def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int = 1, fps: int = 20,
+def animate(rec: EpisodeRecord, path: Path, title: str, style: str, *, every: int = 1, fps: int = 20,
             trail: int = 25, round_: int = 0, crowd_from: int = 200, receivers: int = 40, seed: int = 0,
             stills: Path | None = None, window: list[float] | None = None) -> tuple[Path, int]:
     """Write the episode as a GIF (path ending .gif) or MP4 (.mp4, needs ffmpeg): frames at steps 0, every,
@@ -125,8 +125,8 @@ def animate(rec: EpisodeRecord, path: Path, title: str, style: str, every: int =
     steps = list(range(0, rec.steps + 1, max(1, every)))
     if steps[-1] != rec.steps:
         steps.append(rec.steps)
-    scene = (CrowdScene(rec, title, style, round_, trail, receivers, seed, window=window)
-             if rec.n_agents >= crowd_from else _Scene(rec, title, style, round_, trail, window=window))
+    scene = (CrowdScene(rec, title, style, round_=round_, trail=trail, receivers=receivers, seed=seed, window=window)
+             if rec.n_agents >= crowd_from else _Scene(rec, title, style, round_=round_, trail=trail, window=window))
     try:
         frames = []
         for t in steps:

@@ -37,7 +37,7 @@ def window_receivers(rec: EpisodeRecord, window: list[float] | None) -> np.ndarr
 class CrowdScene(BlitScene):
     """The crowd frames of one episode; ``drawn`` and ``total`` are the edge counts of the last ``draw``."""
 
-    def __init__(self, rec: EpisodeRecord, title: str, style: str, round_: int, trail: int, receivers: int,
+    def __init__(self, rec: EpisodeRecord, title: str, style: str, *, round_: int, trail: int, receivers: int,
                  seed: int = 0, width: float = 10.0, dpi: int = 90, window: list[float] | None = None):
         from matplotlib.collections import LineCollection
         from matplotlib.colors import to_rgba

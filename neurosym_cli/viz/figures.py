@@ -174,7 +174,7 @@ def unlabeled_scene(label: str, rec: EpisodeRecord, step: int, path: Path, title
     return save_figure(fig, path)
 
 
-def rule_grid(program: Program, round_: int, fmap: FeatureMap, pair_dim: int, agent_input: np.ndarray,
+def rule_grid(program: Program, round_: int, fmap: FeatureMap, *, pair_dim: int, agent_input: np.ndarray,
               origin: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> list[tuple[np.ndarray, np.ndarray | None]]:
     """For each rule of the round: where a hypothetical other agent at each grid point passes the rule's filter,
     (len(ys), len(xs)) bool, and for an argmax rule the score it would get there (else None).
@@ -198,7 +198,7 @@ def rule_grid(program: Program, round_: int, fmap: FeatureMap, pair_dim: int, ag
     return out
 
 
-def rule_regions(program: Program, fmap: FeatureMap, pair_dim: int, rec: EpisodeRecord, agent: int, step: int,
+def rule_regions(program: Program, fmap: FeatureMap, pair_dim: int, rec: EpisodeRecord, *, agent: int, step: int,
                  round_: int, path: Path, title: str, grid: int = 160) -> Path:
     """Figure 4: one panel per rule, for agent ``agent`` at ``step``: shaded where another agent would pass the
     rule's filter; for an argmax rule, the score there as a heat map; the other agents as dots and the agent the
@@ -207,7 +207,8 @@ def rule_regions(program: Program, fmap: FeatureMap, pair_dim: int, rec: Episode
     rules = program.rounds[round_]
     xlim, ylim, _ = frame_limits(rec.pos[step], rec.goal, ratio=(0.8, 1.25))
     xs, ys = np.linspace(*xlim, grid), np.linspace(*ylim, grid)
-    regions = rule_grid(program, round_, fmap, pair_dim, rec.inputs[step, agent], rec.pos[step, agent], xs, ys)
+    regions = rule_grid(program, round_, fmap, pair_dim=pair_dim, agent_input=rec.inputs[step, agent],
+                        origin=rec.pos[step, agent], xs=xs, ys=ys)
     cols = min(len(rules), 3)
     rows = (len(rules) + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 5.4 * rows), dpi=110, squeeze=False)
