@@ -46,7 +46,7 @@ sys.path.insert(0, str(ROOT))
 
 # the jobs live in benchmarks/results/ (its __init__ says which module does what); these names are the entry
 # point's, and what tests/test_results_doc.py reads
-from benchmarks.results.claims import Claim, ClaimSpec, claims, evaluate  # noqa: E402,F401
+from benchmarks.results.claims import Claim, ClaimSpec, Condition, claims, evaluate  # noqa: E402,F401
 from benchmarks.results.collect import (collect, collect_noisy, collect_rl, collect_select,  # noqa: E402
                                         collect_stress, collect_vmas)
 from benchmarks.results.figures import (draw_figures, draw_pareto, draw_seed_figures, draw_stress,  # noqa: E402

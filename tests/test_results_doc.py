@@ -91,7 +91,45 @@ def test_the_paper_claims_are_records_with_their_source():
     from benchmarks.results.claims import load
 
     specs = load()
-    assert len({s.name for s in specs}) == len(specs) == 10
-    assert {s.family for s in specs} == {"formation", "unlabeled-goals"}
-    assert all(s.paper and ("Figure" in s.source or "Table" in s.source) for s in specs)
+    families = {s.family for s in specs}
+    assert families == {"formation", "unlabeled-goals", "appendix-d", "appendix-e", "vmas"}
+    for fam in families:  # a claim's name is its row: unique within its family
+        names = [s.name for s in specs if s.family == fam]
+        assert len(set(names)) == len(names), fam
+    assert sum(s.family in ("formation", "unlabeled-goals") for s in specs) == 10
+    assert all(s.paper and any(w in s.source for w in ("Figure", "Table", "Appendix")) for s in specs)
     assert next(s for s in specs if "4.13" in s.name).threshold == pytest.approx(0.9 * 4.13)
+
+
+def test_claim_records_of_the_appendices_read_optional_baselines_second_tests_and_named_numbers():
+    # requires: a claim on a baseline a run may lack is checked only where it is there
+    opt = _spec(requires=("z",), b="z", long="x below {b_label}: {d_pm}{weak}", digits=3)
+    assert not opt.applies(_variant({"x": [1.0, 2.0]}))
+    v = _variant({"x": [1.0, 2.0, 3.0], "z": [2.0, 3.1, 3.9]})
+    c = results_doc.evaluate(opt, v)
+    assert opt.applies(v) and c.holds and c.long == "x below z: −1.000 ± " + c.long.split(" ± ")[1]
+    # also: the loss gap holds, but the second test (a lower degree) fails, and so does the claim
+    gap = _spec(quantity="gap", test="abs_at_most", threshold=5.0, metrics=("cost", "max_degree"),
+                also=results_doc.Condition(quantity="diff", test="below", threshold=0.0, metrics=("max_degree",)),
+                long="{q:+.1f} % at {a_max_degree:.0f} vs {b_max_degree:.0f}")
+    near = {"x": [10.2, 10.2], "y": [10.0, 10.0]}
+    assert results_doc.evaluate(gap, _variant(near, **{"x:max_degree": 3.0, "y:max_degree": 4.0})).holds
+    c = results_doc.evaluate(gap, _variant(near, **{"x:max_degree": 5.0, "y:max_degree": 4.0}))
+    assert not c.holds and c.long == "+2.0 % at 5 vs 4"
+    # dominated: how many of `among` are at most b's on every metric, named after the verdict when any is
+    dom = _spec(quantity="dominated", a="", among=("p", "q"), b="y", metrics=("cost", "max_degree"), test="below",
+                threshold=1.0, long="neither beats y", after=" ({who} does)", cell="")
+    v = _variant({"p": [1.0, 1.0], "q": [5.0, 5.0], "y": [2.0, 2.0]}, **{"p:max_degree": 2.0, "y:max_degree": 3.0})
+    c = results_doc.evaluate(dom, v)
+    assert not c.holds and c.value == 1 and c.after == " (p does)"
+    v = _variant({"p": [1.0, 1.0], "q": [5.0, 5.0], "y": [2.0, 2.0]}, **{"p:max_degree": 4.0, "y:max_degree": 3.0})
+    assert results_doc.evaluate(dom, v).holds and results_doc.evaluate(dom, v).after == ""
+    # value: a number the section computes, tested by equality, with words after a failure
+    k = _spec(quantity="value", a="", b="", field="k", test="equals", threshold=4.0, long="K = {k} on {where}",
+              after="; {k} against {other}", cell="")
+    assert results_doc.evaluate(k, _variant({}), {"k": 4, "where": "noisy", "other": 2}).holds
+    c = results_doc.evaluate(k, _variant({}), {"k": 5, "where": "noisy", "other": 2})
+    assert not c.holds and c.long == "K = 5 on noisy" and c.after == "; 5 against 2"
+    with pytest.raises(ValueError, match="among goes with quantity dominated"):
+        _spec(quantity="dominated", a="")
+

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 from neurosym_cli.dsl import parse
 
+from .claims import Claim, of_family
 from .figures import vmas_order
 from .files import DOCS, FIGURES, ORDER, RESULTS, read, with_selected
 from .tables import EVAL_PM, gap, mean, ms, paired, pm, readings, shown, verdict
+
+
+def lines(claims: list[Claim]) -> list[str]:
+    """Claims as the sections list them: '- <line> -> <verdict>[<what follows a failure>]'."""
+    return [f"- {c.long} -> {verdict(c.holds)}{c.after}" for c in claims]
 
 
 def rl(task: str, variants: dict[str, dict]) -> str:
@@ -38,21 +44,7 @@ def rl(task: str, variants: dict[str, dict]) -> str:
              (f"{b} (outside the grid)" if b in extra else b))
         out.append(f"| {name} | {ms(vs, b, 'cost')} | {ms(vs, b, 'max_in')} | {ms(vs, b, 'max_out')} | "
                    f"{ms(vs, b, 'max_degree')} |")
-    pr = "prog-retrained"
-    d1, d2 = paired(vs, "rl1", pr), paired(vs, "rl2", pr)
-    deg = {b: mean(vs, b, "max_degree") for b in ("rl1", "rl2", pr, "tf-full")}
-    ok1 = deg["rl1"] > deg[pr]
-    ok2 = d2[0] - d2[1] > 0
-    dominated = [b for b in ("rl1", "rl2") if mean(vs, b) <= mean(vs, pr) and deg[b] <= deg[pr]]
-    out += ["", "The paper's claims (appendix D):", "",
-            f"- rl1 (the lowest loss over the settings) has a much higher degree than prog-retrained: max in+out "
-            f"{deg['rl1']:.2f} vs {deg[pr]:.2f} (tf-full {deg['tf-full']:.2f}); its loss against prog-retrained: "
-            f"{pm(d1)} (paired) -> {verdict(ok1)}",
-            f"- rl2 (the lowest degree) has a much higher loss than prog-retrained: {mean(vs, 'rl2'):.2f} vs "
-            f"{mean(vs, pr):.2f} (paired {pm(d2)}), at max in+out {deg['rl2']:.2f} -> {verdict(ok2)}",
-            f"- the program does better than both: neither pick has both a loss and a degree at most "
-            f"prog-retrained's -> {verdict(not dominated)}"
-            + ("" if not dominated else f" ({', '.join(dominated)} does)")]
+    out += ["", "The paper's claims (appendix D):", "", *lines(of_family("appendix-d", vs))]
     t = r["oracle_training"]
     rl_rate = sum(s["rollouts_per_second"] for s in r["settings"]) / len(r["settings"])
     out += ["", f"Cost: an rl setting trained at {rl_rate:.1f} rollouts/s (mean over the settings, {r['jobs']} "
@@ -102,9 +94,6 @@ def noisy(task: str, clean: str) -> str:
     out += ["", f"The selected program (searched with K = {sel['rules']}; {kept} rules left after simplification "
             "dropped those that never fire on D):", "", "```", text, "```", "", *([*said, ""] if said else [])]
     out += readings(program, sel["task"], sel["features"])
-    g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
-    ok1 = abs(g) <= 5 and mean(v, pr, "max_degree") < mean(v, "tf-full", "max_degree")
-    ok2 = sel["rules"] == 4
     if "no-comm" in v["baselines"]:
         def vs_none(b: str) -> str:
             return f"{gap(v, b, 'no-comm'):+.1f} %".replace("-", "−")
@@ -113,15 +102,9 @@ def noisy(task: str, clean: str) -> str:
                 f"{vs_none('tf-full')} against it (paired {pm(paired(v, 'tf-full', 'no-comm'))}), prog-retrained "
                 f"{vs_none(pr)} (paired {pm(paired(v, pr, 'no-comm'))}), hard-attn {vs_none('hard-attn')}, dist "
                 f"{vs_none('dist')}."]
-    out += ["", "The paper's claims (appendix E):", "",
-            f"- prog-retrained has a loss similar to tf-full (within 5 %) with a lower degree: {mean(v, pr):.2f} vs "
-            f"{mean(v, 'tf-full'):.2f}, {g:+.1f} % (paired {pm(d)}); max in+out {mean(v, pr, 'max_degree'):.2f} vs "
-            f"{mean(v, 'tf-full', 'max_degree'):.2f} -> {verdict(ok1)}",
-            f"- the best policy has four rules, against two without failures: the pick was searched with K = "
-            f"{sel['rules']} and keeps {kept} rules (the validation-best program K = {best['rules']}); on {clean} "
-            f"without failures our selection picked K = {sel_clean['rules']} -> {verdict(ok2)}"
-            + ("" if ok2 else f"; more rules than without failures: searched with K = {sel['rules']} against "
-               f"{sel_clean['rules']}, and {kept} rules kept against {len(parse(sel_clean['program']).rounds[0])}")]
+    picks = {"searched_k": sel["rules"], "kept": kept, "best_k": best["rules"], "clean": clean,
+             "clean_k": sel_clean["rules"], "clean_kept": len(parse(sel_clean["program"]).rounds[0])}
+    out += ["", "The paper's claims (appendix E):", "", *lines(of_family("appendix-e", v, picks))]
     return "\n".join(out)
 
 
@@ -181,46 +164,24 @@ def vmas(task: str) -> str:
             + ")."]
     return "\n".join(out + ["", "Claims of the paper, checked the same way as on its tasks (paired differences "
                              "over the evaluation seeds, 95 % t interval):", ""]
-                     + [f"- {line}" for line in vmas_claims(v)])
+                     + vmas_claims(v))
 
 
 def vmas_claims(v: dict) -> list[str]:
-    """The paper's claims on a VMAS run, each line with its numbers and its verdict; failures stay in, with why."""
-    pr, b = "prog-retrained", v["baselines"]
-    lines = []
-
-    def lower(a: str, than: str, what: str) -> bool:
-        d = paired(v, a, than)
-        ok = d[0] + d[1] < 0
-        note = "" if ok else (" (lower on average, not significant)" if d[0] < 0 else "")
-        lines.append(f"{what}: {mean(v, a):.3f} vs {mean(v, than):.3f} (paired difference {pm(d, 3)}){note} -> "
-                     f"{verdict(ok)}")
-        return ok
-
-    comm = lower("tf-full", "no-comm", "communication matters (tf-full below no-comm)")
-    g, d = gap(v, pr, "tf-full"), paired(v, pr, "tf-full")
-    lines.append(f"prog-retrained close to tf-full (within 5 %): {mean(v, pr):.3f} vs {mean(v, 'tf-full'):.3f}, "
-                 f"{g:+.1f} % (paired difference {pm(d, 3)}) -> {verdict(abs(g) <= 5)}")
-    lower(pr, "dist", "prog-retrained better than dist")
-    lower(pr, "no-comm", "prog-retrained below no-comm")
-    d = paired(v, "prog", pr)
-    lines.append(f"retraining is needed (prog worse than prog-retrained): {mean(v, 'prog'):.3f} vs {mean(v, pr):.3f} "
-                 f"(paired difference {pm(d, 3)}) -> {verdict(d[0] - d[1] > 0)}")
-    for m, words, other in (("max_out", "max out", "hard-attn"), ("max_degree", "max in+out", "tf-full")):
-        lines.append(f"prog-retrained {words} lower than {other}: {ms(v, pr, m)} vs "
-                     f"{ms(v, other, m)} (mean ± 95 % t half-width) -> {verdict(mean(v, pr, m) < mean(v, other, m))}")
-    for other in ("expo", "comm-range"):  # beyond the paper: the topologies VMAS users have (ExpoComm, BenchMARL)
-        if other in b:
-            lower(pr, other, f"beyond the paper: prog-retrained better than {b[other]['label']}")
+    """The paper's claims on a VMAS run (claims.toml, family vmas), each line with its numbers and its verdict;
+    failures stay in, with why, and a last line on what they are worth when communication does not help."""
+    checked = of_family("vmas", v)
+    out = lines(checked)
+    comm = next(c for c in checked if c.name.startswith("communication matters")).holds
     d = paired(v, "tf-full", "no-comm")
     if d[0] - d[1] > 0:
-        lines.append("here hearing nobody is better than hearing everybody: at this budget the oracle has not learned "
-                     "to gain from what it hears (its training loss never went below no-comm's, table above), so "
-                     "the claims about the program compare sparse models against an oracle worse than silence "
-                     "(docs/vmas.md, 'Results').")
+        out.append("- here hearing nobody is better than hearing everybody: at this budget the oracle has not learned "
+                   "to gain from what it hears (its training loss never went below no-comm's, table above), so the "
+                   "claims about the program compare sparse models against an oracle worse than silence "
+                   "(docs/vmas.md, 'Results').")
     elif not comm:
-        silent = b[pr]["summary"]["max_in"]["mean"] == 0
-        lines.append("where hearing nobody is as good as hearing everybody, the claims about the program say little "
-                     "about the method" + (": the search's best program is then the silent one" if silent else "")
-                     + ", and every comparison is within the noise of this small budget (docs/vmas.md, 'Results').")
-    return lines
+        silent = v["baselines"]["prog-retrained"]["summary"]["max_in"]["mean"] == 0
+        out.append("- where hearing nobody is as good as hearing everybody, the claims about the program say little "
+                   "about the method" + (": the search's best program is then the silent one" if silent else "")
+                   + ", and every comparison is within the noise of this small budget (docs/vmas.md, 'Results').")
+    return out
