@@ -98,6 +98,24 @@ class SelectConfig:
         _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
 
 
+PIPELINE_SELECT = ("none", "front")
+"""pipeline.select: none runs the searched program as it is; front picks among its degree-budget front"""
+
+
+@dataclass
+class PipelineConfig:
+    """`neurosym pipeline`: how the run's program (prog, prog-retrained) is chosen (stages/front_select.py)."""
+
+    select: str = "none"
+    """none: the single-lam search's program; front: search the degree-budget front (synth.front=true), retrain
+    the oracle under each distinct program of it, and take the lowest max in+out whose validation loss is
+    statistically similar to the best (silence only where no-comm is as good as tf-full on validation)"""
+
+    def __post_init__(self) -> None:
+        _check(self.select in PIPELINE_SELECT, f"pipeline.select must be one of {', '.join(PIPELINE_SELECT)}, "
+               f"got {self.select!r}")
+
+
 @dataclass
 class ReportConfig:
     """`neurosym report`: statistics across training seeds (neurosym_cli/seeds.py, stats.py)."""

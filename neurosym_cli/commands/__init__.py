@@ -33,7 +33,7 @@ USES: dict[str, tuple[str, ...]] = {
     "show-program": ("task", "budget", "baseline", "rules", "lam", "features", "program", "selected", "seed",
                      "runs_root", "synth"),
     "pipeline": ("task", "budget", "baselines", "rules", "lam", "features", "selected", *_RUN, "overwrite", "logger",
-                 "plots", "model", "optim", "synth", "select", "rl", "render"),
+                 "plots", "model", "optim", "synth", "select", "rl", "render", "pipeline"),
     "select": ("task", "budget", *_RUN, "overwrite", "logger", "select", "synth", "optim"),
     "stress": ("task", "budget", "rules", "lam", "features", "selected", *_RUN, "plots", "stress", "synth"),
     "rl": ("task", "budget", *_RUN, "overwrite", "logger", "plots", "rl", "model", "optim"),

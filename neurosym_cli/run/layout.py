@@ -11,6 +11,7 @@ composes them into paths, the schemes never do.
     <exp_dir>/tensorboard/<run>/          event files (logger=tensorboard)
     <exp_dir>/pipeline_timings.json       each stage's wall time (`neurosym pipeline`)
     <exp_dir>/select/                     selected.json, selection.json/.csv, val/<label>.json (`neurosym select`)
+    <exp_dir>/select/front/               <tag>.json, <tag>-b<budget>.txt (pipeline.select=front)
     <exp_dir>/rl/                         picks.json, grid.json/.csv (`neurosym rl`)
     <exp_dir>/stress/                     stress.json/.csv/.png (`neurosym stress`)
     <exp_dir>/export/<baseline label>/    an export folder, its record manifest.json (`neurosym export`)
@@ -52,6 +53,8 @@ METRICS, METRICS_CSV = "metrics.json", "metrics.csv"
 """an evaluation's summary and its per-seed rows (eval/<label>/)"""
 SELECTED, SELECTION, VAL = "selected.json", "selection", "val"
 """select/: the choice, the whole selection (.json, .csv), and the validation rows per label (val/<label>.json)"""
+FRONT_SELECT = "front"
+"""select/front/: the pipeline's choice among a search's degree-budget front and its candidates' program files"""
 PICKS, GRID = "picks.json", "grid"
 """rl/: the picks rl1 and rl2, and every setting (.json, .csv)"""
 TIMINGS = "pipeline_timings.json"
@@ -132,6 +135,16 @@ class _Folder:
     def val_file(self, label: str) -> Path:
         """select/val/<label>.json: one baseline's rows on the validation seeds."""
         return self.select_dir / VAL / f"{label}.json"
+
+    def front_choice_file(self, tag: str) -> Path:
+        """select/front/<tag>.json: the choice among search <tag>'s front (pipeline.select=front), every candidate's
+        validation rows beside it."""
+        return self.select_dir / FRONT_SELECT / f"{tag}.json"
+
+    def front_candidate_file(self, tag: str, budget: float) -> Path:
+        """select/front/<tag>-b<budget>.txt: the program of one budget of search <tag>'s front, run as program=
+        (its evaluation label and retrained model are named by its content, schemes/searched.user_program_tag)."""
+        return self.select_dir / FRONT_SELECT / f"{tag}-b{budget:g}.txt"
 
     @property
     def rl_dir(self) -> Path:

@@ -25,10 +25,19 @@ from .train import retrain, train
 RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": evaluate_baseline}
 
 
-def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage) -> tuple[RunConfig, RunInfo]:
-    """The pipeline's config with the stage's command and baseline (what `neurosym <verb> baseline=B` composes)."""
+FRONT_RUNS = ("prog", "prog-retrained")
+"""the baselines that run under the program pipeline.select=front picks (their search is the front's)"""
+
+
+def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage, program: str = "") -> tuple[RunConfig, RunInfo]:
+    """The pipeline's config with the stage's command and baseline (what `neurosym <verb> baseline=B` composes);
+    ``program``: the file a program baseline's retrain or eval runs under (program=), "" for the searched one.
+    pipeline.select=front searches prog's front (synth.front=true)."""
     b = with_run(cfg, stage.baseline)
-    return dataclasses.replace(cfg, cmd=stage.verb, baseline=b), RunInfo(info.multirun, info.log_dir)
+    if stage.verb == "synth" and stage.baseline == "prog" and cfg.pipeline.select == "front":
+        cfg = dataclasses.replace(cfg, synth=dataclasses.replace(cfg.synth, front=True))
+    program = program if stage.verb != "synth" and b.has_program else ""
+    return dataclasses.replace(cfg, cmd=stage.verb, baseline=b, program=program), RunInfo(info.multirun, info.log_dir)
 
 
 def _trained_seconds(history: Path) -> float:
@@ -57,27 +66,39 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     timings = read_json(timing_file, pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
-    for k, stage in enumerate(stages, start=1):
-        log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
-                 clock(time.perf_counter() - t0))
-        stage_cfg, stage_info = stage_config(cfg, info, stage)
+
+    def run(stage: Stage, program: str = "") -> dict:
+        """One stage on the pipeline's config (``program``: a program baseline's file), its wall time kept."""
+        stage_cfg, stage_info = stage_config(cfg, info, stage, program)
         # stages print no intermediate tables or live views' final renders; the pipeline prints the final table
         stage_info.multirun = info.multirun or stage.verb == "eval"
         start = time.perf_counter()
-        results[f"{stage.verb}:{stage.baseline}"] = RUNNERS[stage.verb](stage_cfg, stage_info)
+        result = RUNNERS[stage.verb](stage_cfg, stage_info)
         took = time.perf_counter() - start
         if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
             took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
         # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
-        timings[stage.name] = round(took if stage.verb == "eval" else max(took, timings.get(stage.name, 0.0)), 1)
+        name = stage.name + (f" {Path(program).stem}" if program else "")
+        timings[name] = round(took if stage.verb == "eval" else max(took, timings.get(name, 0.0)), 1)
         write_json(timing_file, timings)
+        return result
+
+    chosen = ""
+    if cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines):
+        from .front_select import select_front
+
+        chosen = str(select_front(cfg, run))
+    for k, stage in enumerate(stages, start=1):
+        log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
+                 clock(time.perf_counter() - t0))
+        results[f"{stage.verb}:{stage.baseline}"] = run(stage, chosen if stage.baseline in FRONT_RUNS else "")
     print_table(cfg)
     from ..config import UserError
     from .render import make_figures
 
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
-        if cfg.plots:
-            make_figures(cfg, info)
+        if cfg.plots:  # of the program prog-retrained ran under (the front's pick, under pipeline.select=front)
+            make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "

@@ -1,0 +1,181 @@
+"""`neurosym pipeline pipeline.select=front`: the run's program chosen among its search's degree-budget front by
+what the user cares about, the task's loss on validation seeds after retraining (the paper's appendix B, over the
+front's budgets instead of a lambda grid; issue 37).
+
+    1. the oracle, its search with the front (synth.front=true: one program per budget of max in+out on D) and
+       no-comm's own model;
+    2. every distinct program of the front (the lowest budget that reaches it) is written to
+       select/front/<tag>-b<budget>.txt and run as program= (its label and retrained model are named by its
+       content); the oracle is retrained under it (budget.retrain_rollouts, the retraining prog-retrained gets
+       anyway, so the pick's is reused) and validated: loss per validation seed (``budget.val_seeds``, episodes of
+       their own stream, never a test episode; select.validate) and max in+out;
+    3. tf-full and no-comm validated the same way: communication helps when the paired 95 % Student-t interval of
+       no-comm - tf-full over the validation seeds lies above 0; then silent programs are no candidates;
+    4. the pick by select.choose: among the candidates whose paired 95 % interval of the loss difference to the
+       validation-best contains 0, the lowest validation max in+out (the lower mean loss on a tie);
+    5. the choice and every candidate's rows in select/front/<tag>.json; the pipeline then makes and evaluates prog
+       and prog-retrained under the picked program, on the test seeds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import time
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from .. import __version__
+from ..baselines import ORACLE, Stage, run_args
+from ..config import RunConfig, UserError
+from ..dsl.ast import Program
+from ..dsl.files import save_program
+from ..dsl.parser import parse
+from ..dsl.printer import to_text
+from ..run import RunDir
+from ..schemes import get
+from ..stats import mean_ci
+from ..utils.console import clock, log, say
+from ..utils.io import write_json
+from .front import read_front
+from .guard import SILENT
+from .select import choose, validate
+
+SEARCH, SILENT_BASELINE = "prog", "no-comm"
+"""the baseline whose search's front is chosen among, and the model that hears nobody (the rule's reference)"""
+RETRAINED = "prog-retrained"
+"""the baseline each candidate is retrained and validated as"""
+RULE = ("retrained under each distinct program of the front, validated on budget.val_seeds: among the programs "
+        "whose paired 95% Student-t interval of the validation loss difference to the best contains 0, the lowest "
+        "validation max in+out (lower mean loss on a tie); silent programs are no candidates when tf-full beats "
+        "no-comm on validation (paired 95% interval of no-comm - tf-full above 0)")
+"""the rule, as the choice file states it"""
+
+RunStage = Callable[..., Any]
+"""runs one pipeline stage: ``run(stage, program="")`` (stages/pipeline.py), reusing what exists"""
+
+
+# --------------------------------------------------------------------------------------------- the rule
+def communication_helps(tf_loss: Sequence[float], nc_loss: Sequence[float]) -> tuple[bool, float, float]:
+    """(helps, mean, half-width) of no-comm - tf-full over the same validation seeds: helps when the paired 95 %
+    Student-t interval lies above 0 (hearing everybody is better than hearing nobody beyond chance)."""
+    if len(tf_loss) != len(nc_loss):
+        raise ValueError(f"tf-full and no-comm are validated on different seeds: {len(tf_loss)} vs {len(nc_loss)}")
+    d, h = mean_ci([n - t for n, t in zip(nc_loss, tf_loss)])
+    return d - h > 0, d, h
+
+
+def pick(rows: Sequence[dict[str, Any]], *, helps: bool) -> list[dict[str, Any]]:
+    """The rule on validation rows (``name``, ``loss`` per validation seed, ``degree``: mean max in+out over them).
+
+    Silent rows (degree below guard.SILENT) are left out when ``helps`` (unless every row is silent: then they stay,
+    and the guard's line follows). Returns select.choose's annotated rows of the candidates (one ``picked``), then
+    the left-out rows with ``excluded`` true."""
+    silent = [r for r in rows if r["degree"] < SILENT]
+    keep = [r for r in rows if not (helps and r["degree"] < SILENT)] or list(rows)
+    chosen = choose(keep)
+    for r in chosen:
+        r["excluded"] = False
+    left = [dict(r, excluded=True, similar=None, picked=False) for r in silent if not any(r is k for k in keep)]
+    for r in left:
+        r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
+    return chosen + left
+
+
+# --------------------------------------------------------------------------------------------- candidates
+def candidates(front: dict) -> list[dict[str, Any]]:
+    """The distinct programs of a front.json, lowest budget first: {budget, program (every round's rules, text),
+    l1 and degree (per round, on D)}. A budget whose program (all rounds) is a lower budget's is no new candidate."""
+    rounds = sorted(front["rounds"], key=lambda r: r["round"])
+    budgets = [b["budget"] for b in rounds[0]["budgets"]]
+    if any([b["budget"] for b in r["budgets"]] != budgets for r in rounds):
+        raise UserError("the front's rounds list different budgets; search it again with overwrite=true")
+    out, seen = [], set()
+    for i, budget in enumerate(budgets):
+        rows = [r["budgets"][i] for r in rounds]
+        program = Program(tuple(parse(row["program"]).rounds[0] for row in rows))
+        text = to_text(program)
+        if text in seen:
+            continue
+        seen.add(text)
+        out.append({"budget": float(budget), "program": text, "l1": [row["l1"] for row in rows],
+                    "degree_on_d": [row["degree"] for row in rows]})
+    return out
+
+
+def write_candidate(path: Path, cand: dict, tag: str) -> None:
+    """A candidate's program file; left as it is when it already holds the same bytes (its name and content name
+    its label and retrained model: rewriting the same text keeps them)."""
+    header = [f"budget {cand['budget']:g} of the degree-budget front of {tag}: L1 on D "
+              + ", ".join(f"{x:.6g}" for x in cand["l1"]) + ", max in+out on D "
+              + ", ".join(f"{x:.4g}" for x in cand["degree_on_d"])]
+    text = "".join(f"# {h}\n" for h in header) + cand["program"]
+    if path.exists() and path.read_text() == text:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    save_program(path, cand["program"], header)
+
+
+# --------------------------------------------------------------------------------------------- the stage
+def _val(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, Any]:
+    return validate(dataclasses.replace(cfg, baseline=get(baseline), cmd="eval", program=program))
+
+
+def select_front(cfg: RunConfig, run: RunStage) -> Path:
+    """Steps 1-5 of the module docstring; returns the picked program's file. ``run(stage, program="")`` runs one
+    pipeline stage (stages/pipeline.py), reusing what exists."""
+    t0 = time.perf_counter()
+    search = dataclasses.replace(cfg, baseline=get(SEARCH), program="")
+    rd = RunDir(search)
+    tag = rd.program_tag
+    for stage in (Stage("train", ORACLE), Stage("synth", SEARCH), Stage("train", SILENT_BASELINE)):
+        run(stage)
+    remake = f"neurosym synth {run_args(cfg)} synth.front=true overwrite=true"
+    front = read_front(rd.front_file, remake)
+    cands = candidates(front)
+    tf, nc = _val(cfg, ORACLE), _val(cfg, SILENT_BASELINE)
+    helps, gap, gap_ci = communication_helps(tf["loss"], nc["loss"])
+    say(f"front selection {cfg.task.name} ({tag}): {len(cands)} distinct program(s) of {len(front['rounds'][0]['budgets'])} "
+        f"budgets, {cfg.budget.val_seeds} validation seeds; tf-full {mean_ci(tf['loss'])[0]:.4g}, no-comm "
+        f"{mean_ci(nc['loss'])[0]:.4g} (no-comm - tf-full {gap:+.3g} ± {gap_ci:.3g}: communication "
+        + ("helps, silence is no candidate)" if helps else "does not clearly help, silence may be chosen)"))
+    if helps:  # a program silent on D is silent in every episode: no candidate, and no retraining spent on it
+        talking = [c for c in cands if max(c["degree_on_d"]) >= SILENT]
+        if talking and len(talking) < len(cands):
+            say(f"front: {len(cands) - len(talking)} program(s) silent on D left out (communication helps)")
+            cands = talking
+    rows = []
+    for k, cand in enumerate(cands, start=1):
+        path = rd.front_candidate_file(tag, cand["budget"])
+        write_candidate(path, cand, tag)
+        say(f"front {k}/{len(cands)}: budget {cand['budget']:g} (max in+out on D "
+            + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + f"): retraining ({clock(time.perf_counter() - t0)} "
+            "elapsed)")
+        run(Stage("retrain", RETRAINED), program=str(path))
+        v = _val(cfg, RETRAINED, str(path))
+        m, h = mean_ci(v["loss"])
+        say(f"front {k}/{len(cands)}: budget {cand['budget']:g}: validation loss {m:.4g} ± {h:.3g}, max in+out "
+            f"{v['degree']:.2f}")
+        rows.append({"name": f"b{cand['budget']:g}", "budget": cand["budget"], "program_file": str(path),
+                     "label": v["label"], "program": cand["program"], "l1_on_d": cand["l1"],
+                     "degree_on_d": cand["degree_on_d"], "loss": v["loss"], "degree": v["degree"],
+                     "max_in": v["max_in"], "max_out": v["max_out"]})
+    ranked = pick(rows, helps=helps)
+    chosen = next(r for r in ranked if r["picked"])
+    if helps and chosen["degree"] < SILENT:
+        log.warning("every program of the front is silent on validation, though tf-full beats no-comm: the front "
+                    "found no communicating program worth its degree; try synth.search=hybrid or more "
+                    "budget.mcmc_steps")
+    write_json(rd.front_choice_file(tag), {
+        "command": "pipeline", "kind": "front-selection", "version": __version__, "task": cfg.task.name,
+        "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
+        "front_sha1": hashlib.sha1(rd.front_file.read_bytes()).hexdigest(), "val_seeds": cfg.budget.val_seeds,
+        "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE,
+        "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
+        "communication_helps": helps, "no_comm_minus_tf_full": [gap, gap_ci],
+        "picked": {k: chosen[k] for k in ("budget", "program_file", "label", "program", "degree", "loss_mean")},
+        "candidates": ranked, "seconds": time.perf_counter() - t0, "config": cfg.record()})
+    say(f"[green]front selection[/]: budget {chosen['budget']:g}, validation loss {chosen['loss_mean']:.4g}, max "
+        f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - t0)}); prog and "
+        "prog-retrained run under it")
+    return Path(chosen["program_file"])
