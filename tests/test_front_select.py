@@ -1,0 +1,105 @@
+"""pipeline.select=front (stages/front_select.py): the rule on synthetic validation numbers, the front's distinct
+programs, and a tiny pipeline that writes the choice and runs prog-retrained under it."""
+
+import json
+
+import pytest
+
+from test_cli import run
+
+BASE = [10.0, 11.0, 9.5, 10.5, 10.2, 9.8]
+
+
+def _row(name, losses, degree):
+    return {"name": name, "loss": list(losses), "degree": degree}
+
+
+def _shift(xs, by, wiggle=(0.0,) * 6):
+    return [x + by + w for x, w in zip(xs, wiggle)]
+
+
+def test_the_rule_picks_the_lowest_degree_statistically_similar_to_the_best():
+    from neurosym_cli.stages.front_select import pick
+
+    rows = [_row("b6", BASE, 6.0),  # the validation-best
+            _row("b3", _shift(BASE, 0.02, (0.3, -0.2, 0.25, -0.3, 0.1, -0.05)), 3.0),  # similar, lower degree
+            _row("b4", _shift(BASE, 0.01, (0.1, -0.1, 0.0, 0.05, -0.05, 0.0)), 4.0),  # similar, higher degree
+            _row("b1", _shift(BASE, 1.0, (0.1, -0.1, 0.05, 0.0, -0.05, 0.02)), 1.0)]  # lowest degree, clearly worse
+    out = pick(rows, helps=True)
+    assert [r["name"] for r in out if r["picked"]] == ["b3"]
+    by = {r["name"]: r for r in out}
+    assert by["b6"]["best"] and not by["b1"]["similar"] and by["b4"]["similar"]
+    assert not any(r["excluded"] for r in out)
+
+
+def test_silence_is_chosen_only_when_no_comm_matches_tf_full():
+    from neurosym_cli.stages.front_select import communication_helps, pick
+
+    wiggle = (0.05, -0.04, 0.03, -0.05, 0.02, -0.01)
+    tf = BASE
+    nc_worse = _shift(BASE, 0.8, wiggle)  # hearing nobody clearly costs more
+    nc_same = _shift(BASE, 0.0, (0.3, -0.3, 0.2, -0.25, 0.1, -0.05))  # no significant difference
+    helps, gap, half = communication_helps(tf, nc_worse)
+    assert helps and gap - half > 0
+    assert not communication_helps(tf, nc_same)[0]
+    with pytest.raises(ValueError, match="different seeds"):
+        communication_helps(tf, tf[:3])
+
+    rows = [_row("b0", _shift(BASE, 0.01, wiggle), 0.0),  # silence, as good as the best on validation
+            _row("b2", _shift(BASE, 0.0, (0.2, -0.2, 0.1, -0.1, 0.05, -0.05)), 2.0),
+            _row("b5", BASE, 5.0)]
+    assert [r["name"] for r in pick(rows, helps=False) if r["picked"]] == ["b0"]
+    out = pick(rows, helps=True)
+    assert [r["name"] for r in out if r["picked"]] == ["b2"]
+    silent = next(r for r in out if r["name"] == "b0")
+    assert silent["excluded"] and not silent["picked"] and silent["loss_mean"] == pytest.approx(
+        sum(rows[0]["loss"]) / 6)
+    # a front that is silence alone keeps it (the guard then says communication was thrown away)
+    assert pick([rows[0]], helps=True)[0]["picked"]
+
+
+def test_candidates_are_the_distinct_programs_lowest_budget_first_and_join_rounds():
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.stages.front_select import candidates
+
+    never = "random(filter(d >= 1 and d <= 0, l))"
+    near = "argmax(map(-d, filter(d <= 3, l)))"
+
+    def row(b, program, degree):
+        return {"budget": b, "l1": 1.0 / (1 + degree), "l1_ratio": 0.5, "degree": degree, "max_in": degree / 2,
+                "max_out": degree / 2, "program": program}
+
+    front = {"rounds": [
+        {"round": 1, "budgets": [row(0, never, 0.0), row(1, never, 0.0), row(2, near, 2.0), row(3, near, 2.0)]},
+        {"round": 2, "budgets": [row(0, never, 0.0), row(1, near, 1.0), row(2, near, 1.0), row(3, near, 1.0)]}]}
+    out = candidates(front)
+    assert [c["budget"] for c in out] == [0.0, 1.0, 2.0]  # budget 3 repeats budget 2 in both rounds
+    assert parse(out[1]["program"]).n_rounds == 2 and out[2]["degree_on_d"] == [2.0, 1.0]
+    assert len({c["program"] for c in out}) == 3
+
+
+def test_pipeline_select_is_checked_in_one_line(tmp_path):
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "pipeline.select=best"], tmp_path, check=False)
+    assert p.returncode != 0 and "pipeline.select must be one of none, front" in p.stderr
+    assert "Traceback" not in p.stderr
+
+
+def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_path):
+    from neurosym_cli.stages.results import collect
+
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "budget.val_seeds=3",
+             "baselines=[prog-retrained,no-comm]", "pipeline.select=front"], tmp_path)
+    exp = tmp_path / "two-groups-cross/tiny/seed0"
+    choice = json.loads((exp / "select/front/k2-lam0.5-v1.json").read_text())
+    assert "front 1/" in p.stdout and "retraining" in p.stdout  # a progress line per candidate
+    assert (exp / "synth/k2-lam0.5-v1/front.json").exists()  # select=front searched the front
+    picked = choice["picked"]
+    assert choice["val_seeds"] == 3 and len(choice["tf_full"]["loss"]) == 3
+    assert sum(r["picked"] for r in choice["candidates"]) == 1
+    assert picked["label"].startswith("prog-retrained-file-k2-lam0.5-v1-b")
+    assert (exp / "train" / picked["label"].replace("prog-retrained-", "retrained-", 1) / "model.pt").exists()
+    labels = [label for label, _ in collect(exp)]
+    assert picked["label"] in labels and "no-comm" in labels  # the test evaluation is of the pick
+    assert not any(label.startswith("prog-retrained-k2") for label in labels)  # not the single-lam program's
+    if choice["communication_helps"]:
+        assert picked["degree"] > 0
