@@ -74,8 +74,9 @@ class RenderConfig:
 class SelectConfig:
     """`neurosym select`: the paper's model selection by validation (appendix B) over a grid of configurations."""
 
-    lam: list[float] = field(default_factory=lambda: [0.3, 0.5, 0.7, 1.0])
-    """lambda-tilde values of the grid (paper appendix B)"""
+    lam: list[float] = field(default_factory=list)
+    """lam values of the grid, in the units of synth.objective; empty: that objective's grid (stages/select.LAM_GRIDS:
+    the paper's 0.3-1.0 for paper and hinge, appendix B; 0.1-0.75 for scaled)"""
     rules: list[int] = field(default_factory=lambda: [2, 3, 4, 5])
     """K values of the grid"""
     features: list[str] = field(default_factory=lambda: ["v1", "v2"])
@@ -88,7 +89,7 @@ class SelectConfig:
 
     def __post_init__(self) -> None:
         check_finite(self, "select.")
-        _check(bool(self.lam) and all(x >= 0 for x in self.lam), "select.lam must be a non-empty list of values >= 0")
+        _check(all(x >= 0 for x in self.lam), "select.lam must be a list of values >= 0 (empty: the objective's grid)")
         _check(bool(self.rules) and all(k > 0 for k in self.rules), "select.rules must be a non-empty list of K > 0")
         _check(bool(self.features) and all(f in ("v1", "v2") for f in self.features),
                "select.features must be a non-empty list of v1, v2")

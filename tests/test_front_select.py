@@ -103,3 +103,18 @@ def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_pa
     assert not any(label.startswith("prog-retrained-k2") for label in labels)  # not the single-lam program's
     if choice["communication_helps"]:
         assert picked["degree"] > 0
+
+
+def test_select_lam_grid_follows_the_task_objective(tmp_path):
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.stages.select import LAM_GRIDS, grid, lam_grid
+
+    common = [f"runs_root={tmp_path}", "budget=tiny", "select.rules=[2]", "select.features=[v1]"]
+    paper = compose_config("select", ["task=two-groups-cross", *common])
+    assert paper.synth.objective == "paper" and lam_grid(paper) == [0.3, 0.5, 0.7, 1.0]  # appendix B, unchanged
+    scaled = compose_config("select", ["task=two-groups-cross", "synth.objective=scaled", *common])
+    assert lam_grid(scaled) == LAM_GRIDS["scaled"] and all(x < 1 for x in lam_grid(scaled))
+    assert [c.lam for c in grid(scaled)] == LAM_GRIDS["scaled"]
+    given = compose_config("select", ["task=two-groups-cross", "synth.objective=scaled", "select.lam=[0.05]",
+                                      *common])
+    assert lam_grid(given) == [0.05]  # a grid on the command line is taken as it is

@@ -68,13 +68,24 @@ def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 # ------------------------------------------------------------------------------------------------- the grid
+LAM_GRIDS = {"paper": [0.3, 0.5, 0.7, 1.0], "hinge": [0.3, 0.5, 0.7, 1.0], "scaled": [0.1, 0.25, 0.5, 0.75]}
+"""select.lam when it is empty, by synth.objective: lam means another thing in each objective's units. paper and
+hinge: the paper's grid (appendix B), in the task's action units; scaled: shares of silence's action gap per 2K of
+degree around its default 0.25, below 1 (at lam >= 1 no program of degree 2K beats silence; docs/fidelity.md)"""
+
+
+def lam_grid(cfg: RunConfig) -> list[float]:
+    """The lam values of the grid: select.lam, else the grid of the search's objective (``LAM_GRIDS``)."""
+    return list(cfg.select.lam) or LAM_GRIDS[cfg.synth.objective]
+
+
 def grid(cfg: RunConfig) -> list[RunConfig]:
-    """One prog config per grid point (select.lam x select.rules x select.features), in that order."""
+    """One prog config per grid point (lam_grid x select.rules x select.features), in that order."""
     out, n = [], cfg.task.max_agents
     for k in cfg.select.rules:
         if k >= n:
             raise ConfigError(f"select.rules has K={k}, but an agent of {cfg.task.name} has at most {n - 1} others")
-        for lam in cfg.select.lam:
+        for lam in lam_grid(cfg):
             for f in cfg.select.features:
                 out.append(dataclasses.replace(cfg, rules=k, lam=lam, features=f, baseline=get("prog"), cmd="synth"))
     return out
@@ -190,7 +201,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     open_checkpoint(cfg, oracle=True)  # fail early
     jobs = _jobs(cfg)
     t0 = time.perf_counter()
-    say(f"select {cfg.task.name}: {len(points)} configurations (lam {cfg.select.lam}, K {cfg.select.rules}, "
+    say(f"select {cfg.task.name}: {len(points)} configurations (lam {lam_grid(cfg)}, K {cfg.select.rules}, "
         f"features {cfg.select.features}), {cfg.budget.val_seeds} validation seeds, {jobs} job(s)")
     other = searched_otherwise(cfg, points)
     if other:
@@ -228,7 +239,7 @@ def run_selection(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     table = _table_rows(first, final)
     write_csv(RunDir(cfg).selection_file(".csv"), table)
     write_json(RunDir(cfg).selection_file(), {
-        **record, "grid": {"lam": cfg.select.lam, "rules": cfg.select.rules, "features": cfg.select.features},
+        **record, "grid": {"lam": lam_grid(cfg), "rules": cfg.select.rules, "features": cfg.select.features},
         "finalists": cfg.select.finalists, "programs": first, "retrained": final,
         "test": {b: {m: s for m, s in v.items()} for b, v in test.items()},
         "seconds": {"search_and_validate": t_search, "to_choice": t_select, "total": time.perf_counter() - t0},
