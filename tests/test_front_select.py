@@ -118,3 +118,17 @@ def test_select_lam_grid_follows_the_task_objective(tmp_path):
     given = compose_config("select", ["task=two-groups-cross", "synth.objective=scaled", "select.lam=[0.05]",
                                       *common])
     assert lam_grid(given) == [0.05]  # a grid on the command line is taken as it is
+
+
+def test_the_guard_reads_the_front_pick_label():
+    from neurosym_cli.stages.guard import communication_guard
+
+    def s(cost, degree, ci=0.1):
+        return {"cost": {"mean": cost, "ci95": ci}, "max_degree": {"mean": degree, "ci95": 0.0}}
+
+    rows = [("tf-full", s(3.0, 18.0)), ("no-comm", s(5.0, 0.0)),
+            ("prog-retrained-file-k2-lam0.25-v1-scaled-b0-0123abcd-v1", s(5.2, 0.0))]
+    line = communication_guard(rows)
+    assert line and "prog-retrained-file-k2-lam0.25-v1-scaled-b0" in line and "is silent" in line
+    rows[-1] = ("prog-retrained-file-k2-lam0.25-v1-scaled-b3-0123abcd-v1", s(3.5, 3.0))
+    assert communication_guard(rows) is None

@@ -34,7 +34,9 @@ def communication_guard(rows: list[tuple[str, dict]], rerun: str = "") -> str | 
     if tf_cost is None or nc_cost is None or not tf_cost + _half(tf, "cost") < nc_cost - _half(nc, "cost"):
         return None  # communication does not clearly help here: silence may well be right
     for prefix in PROGRAM_PREFIXES:
-        found = [(label, s) for label, s in rows if label == prefix or label.startswith(prefix + "-k")]
+        # -k...: a searched program's; -file-...: one given as program= (pipeline.select=front's pick)
+        found = [(label, s) for label, s in rows if label == prefix or label.startswith((prefix + "-k",
+                                                                                         prefix + "-file-"))]
         if found:
             break
     else:
