@@ -108,7 +108,8 @@ def test_neighbours_are_single_edits_on_the_grid():
         assert sum(x != y for x, y in zip(new, rules)) == 1
     thresholds = {new[0].cond.left.threshold for new, move in near if move == "threshold"
                   and isinstance(new[0].cond, And) and new[0].cond.right == rules[0].cond.right}
-    assert thresholds == {-3.5, -2.5}  # the grid values next to -3.0 for -b
+    # for -b (grid -9.5 .. 0 by 0.5): the values next to -3.0, an eighth of the grid away (2 values), the ends
+    assert thresholds == {-3.5, -2.5, -4.0, -2.0, -9.5, 0.0}
     assert grid(space, "b", -1.0)[0] == -9.5 and grid(space, "b", 1.0)[-1] == 9.5
 
 

@@ -193,17 +193,18 @@ def _at_rank(space: SearchSpace, name: str, sign: float, frac: float) -> Test:
 
 
 def edits_of_test(t: Test, space: SearchSpace) -> list[tuple[Test, str]]:
-    """Single edits of one test: its threshold to the next grid value below and above, its feature swapped (same
-    sign, same relative rank), its side flipped (f >= c to -f >= -c)."""
+    """Single edits of one test: its threshold to the next grid value below and above, an eighth of the grid below
+    and above, and the grid's ends (MCMC's threshold moves jump as far); its feature swapped (same sign, same
+    relative rank); its side flipped (f >= c to -f >= -c)."""
     (name, w), = t.lhs.terms
     g = grid(space, name, w)
     out: list[tuple[Test, str]] = []
     below = [c for c in g if c < t.threshold]
     above = [c for c in g if c > t.threshold]
-    if below:
-        out.append((replace(t, threshold=below[-1]), "threshold"))
-    if above:
-        out.append((replace(t, threshold=above[0]), "threshold"))
+    jump = max(2, len(g) // 8)
+    moved = {below[-1] if below else None, above[0] if above else None, below[-jump] if len(below) >= jump else None,
+             above[jump - 1] if len(above) >= jump else None, g[0], g[-1]} - {None, t.threshold}
+    out += [(replace(t, threshold=c), "threshold") for c in sorted(moved)]  # type: ignore[type-var]
     frac = _rank(g, t.threshold) / max(len(g) - 1, 1)
     out += [(_at_rank(space, f, w, frac), "feature") for f in space.features if f != name]
     out.append((Test(Linear(((name, -w),)), _r2(-t.threshold)), "sign"))

@@ -8,8 +8,9 @@ runs iterated local search:
   clause dropped or added, an argmax score's feature or sign, a rule's kind), in a random order;
 - **fitting**: at each local optimum, coordinate search over every test's side and threshold on the quantile grid
   (coarse, then the grid values around the best), keeping a value only when it is strictly better;
-- **kicks**: from the phase's best program, two to four random MCMC moves (``sampling.propose``), then climbing
-  and fitting again; the phase keeps the better of the two.
+- **kicks** (last phase only; a restart ends at its local optimum and leaves the rest of its share to the
+  phases after it): from the best program, two to four random MCMC moves (``sampling.propose``), then climbing
+  and fitting again; the search keeps the better of the two.
 
 An equivalence cache keyed by the canonical program (and/or operands in a fixed order) remembers every score, so
 no program is scored twice. The budget is the same as MCMC's: ``steps`` scored programs (cache hits are free),
@@ -141,10 +142,10 @@ def fit(rules: tuple[Rule, ...], s: Score, *, space: SearchSpace, ev: Evaluator,
                 coarse = list(range(0, len(g), stride))
                 for idx in (coarse, None):  # None: the fine values next to the best coarse one
                     if idx is None:
-                        (best_name, best_w), = test_at(rules, site).lhs.terms
-                        if best_w != sign or stride == 1:
+                        now = test_at(rules, site)
+                        if now.lhs.terms[0][1] != sign or stride == 1:  # the best is on the other side
                             continue
-                        at = min(range(len(g)), key=lambda i: abs(g[i] - test_at(rules, site).threshold))
+                        at = min(range(len(g)), key=lambda i: abs(g[i] - now.threshold))
                         idx = [i for i in range(at - stride + 1, at + stride) if 0 <= i < len(g)]
                     for i in idx:
                         cand = with_test(rules, site, Test(Linear(((name, sign),)), g[i]))
@@ -187,7 +188,8 @@ def hybrid(init: Callable[[], tuple[Rule, ...]], space: SearchSpace, scorer: Sco
     ev = Evaluator(scorer, on_step=on_step, max_lookups=50 * steps + 1000)
     t0 = ev.t0
     done = 0
-    for phase, n in phases(steps, restarts, final_fraction):
+    schedule = phases(steps, restarts, final_fraction)
+    for i, (phase, n) in enumerate(schedule):
         done += n
         ev.budget = Budget(done, t0 + seconds * done / steps if seconds > 0 else float("inf"))
         try:
@@ -198,7 +200,9 @@ def hybrid(init: Callable[[], tuple[Rule, ...]], space: SearchSpace, scorer: Sco
             s = ev.score(start, "init", phase)
             ev.stand(start, s)
             best, best_s = descend(start, s, space=space, ev=ev, rng=rng, phase=phase)
-            while True:  # kicks from the phase's best until its share of the budget is spent
+            if i + 1 < len(schedule):
+                continue  # a restart ends at its local optimum: what it leaves goes to the next phases
+            while True:  # kicks from the best until the budget is spent
                 kicked = best
                 for _ in range(rng.randint(2, 4)):
                     kicked, _ = propose(kicked, space, rng)
