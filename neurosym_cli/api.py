@@ -92,6 +92,9 @@ def _with(cfg: RunConfig, cmd: str, baseline: str | None) -> RunConfig:
         import torch
 
         torch.set_num_threads(cfg.threads)
+    from .utils.compiling import configure
+
+    configure(cfg.compile, cfg.device)  # the step compiled or eager (step.py), recorded in runtime
     return cfg
 
 

@@ -14,7 +14,7 @@ from typing import Any, Optional
 from .baselines import BaselineConfig
 from .degrees import OBJECTIVES
 from .errors import ConfigError, UserError, check as _check, check_finite, check_name, cut, lies_under  # noqa: F401  (UserError: re-exported for every layer)
-from .utils import cpu as _cpu
+from .utils import compiling as _compiling, cpu as _cpu
 from .verb_config import (ExportConfig, PipelineConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig,
                           StressConfig)
 
@@ -268,6 +268,12 @@ class RunConfig:
     Every artifact records it and what was in effect (its ``runtime``). ATen's scalar ``default`` kernels are not
     offered: every x86-64 CPU since 2013 runs the AVX2 path, and ARM has neither these kernels nor MKL, so they
     would cost speed without making more machines agree"""
+    compile: str = "auto"
+    """whether the one environment step (observe, the transformer's rounds, dynamics, cost) runs compiled by
+    torch.compile (utils/compiling.py): off is the eager step (every committed number, bit for bit); on compiles it
+    once per bucket shape (eager's numbers up to float rounding; one line and the eager step where it cannot
+    compile); auto is what was measured faster: the eager step today (docs/performance.md, 'The compiled step').
+    Every artifact records it in its ``runtime``; a resume under another compile mode is refused"""
     runs_root: str = "outputs"
     """the directory that holds every run (NEUROSYM_RUNS; default outputs, in the working directory)"""
     exp_dir: str = MISSING
@@ -322,6 +328,7 @@ class RunConfig:
         _check(self.progress in ("auto", "rich", "plain"), "progress must be auto, rich or plain")
         _check(self.threads >= 0, "threads must be non-negative")
         _check(self.cpu_kernels in _cpu.CHOICES, _cpu.check(self.cpu_kernels) or "")
+        _check(self.compile in _compiling.CHOICES, _compiling.check(self.compile) or "")
         _check(self.episode >= 0, f"episode must be >= 0, got {self.episode}")
         _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
         cpus = os.cpu_count() or 1

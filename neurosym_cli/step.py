@@ -12,14 +12,18 @@ A action, K picks of a round, R communication rounds.
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from dataclasses import dataclass
 from typing import Callable
 
 from torch import Tensor
 
-from .policy.comm import CommContext, CommProvider
+from .policy.comm import CommContext, CommProvider, comm_module
 from .policy.transformer import CommTransformer, PolicyOutput
 from .tasks.base import Observation, Rng, Task, TaskState
+from .utils import compiling
+from .utils.console import log
 
 
 @dataclass
@@ -42,9 +46,18 @@ once per step, after it, in time order."""
 
 def step(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState, rng: Rng, t: int) -> Step:
     """One step from ``state`` (B episodes): the task's observation, the communication context, the transformer's
-    rounds under the provider's masks (from the logits) or picks (before any logit), the task's dynamics and cost."""
+    rounds under the provider's masks (from the logits) or picks (before any logit), the task's dynamics and cost.
+    Under ``compile=on`` (utils/compiling.py) the same function runs compiled (``CompiledSteps``); else eager."""
+    if compiling.enabled():
+        return _COMPILED.step(env, policy, comm, state, rng, t)
+    return eager_step(env, policy, comm, state, rng, t)
+
+
+def eager_step(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState, rng: Rng, t: int,
+               context: type[CommContext] = CommContext) -> Step:
+    """The step as written (what ``compile=off`` runs); ``context``: the class of the provider's context."""
     obs = env.observe(state, rng)
-    ctx = CommContext(env, state, obs, rng, t)
+    ctx = context(env, state, obs, rng, t)
     picks: list[Tensor | None] = []
 
     def pick(r: int) -> Tensor | None:
@@ -55,3 +68,144 @@ def step(env: Task, policy: CommTransformer, comm: CommProvider, state: TaskStat
     out = policy(obs, lambda logits, r: comm.select(ctx, logits, r), pick)
     nxt = env.step(state, out.action)
     return Step(t, obs, out, picks, nxt, env.cost(nxt, out.action))
+
+
+# ---------------------------------------------------------------------------------------------- compiled step
+class _Recording:
+    """A bucket's random source that draws as asked and records each draw (method, batch, shape): the plan the
+    compiled step's draws are made by, outside the compiled region, in the same order from the same generator."""
+
+    def __init__(self, rng: Rng):
+        self.rng, self.plan = rng, []
+
+    def _draw(self, method: str, batch: int, *shape: int) -> Tensor:
+        self.plan.append((method, batch, shape))
+        return getattr(self.rng, method)(batch, *shape)
+
+    def randn(self, batch: int, *shape: int) -> Tensor:
+        return self._draw("randn", batch, *shape)
+
+    def rand(self, batch: int, *shape: int) -> Tensor:
+        return self._draw("rand", batch, *shape)
+
+    def keys(self, batch: int) -> Tensor:
+        return self._draw("keys", batch)
+
+
+class _Replay:
+    """The random source inside the compiled step: hands out the draws made before it, in order."""
+
+    def __init__(self, drawn: list[Tensor]):
+        self.drawn, self.i = drawn, 0
+
+    def _next(self, *_: object) -> Tensor:
+        self.i += 1
+        return self.drawn[self.i - 1]
+
+    randn = rand = keys = _next
+
+
+class _Watched(CommContext):
+    """A context that notes whether the provider read the time step (the compiled step does not see it)."""
+
+    read_step = False
+
+    def __getattribute__(self, name: str):
+        if name == "step":
+            type(self).read_step = True
+        return object.__getattribute__(self, name)
+
+
+@dataclass
+class _Shape:
+    """What one bucket shape of one (task, policy, provider) compiles to."""
+
+    plan: list  # [(method, shape without the batch axis)]: the step's random draws
+    fn: Callable | None  # the compiled step, None where it runs eager (it reads the time step)
+    fresh: bool = True  # not yet called: its first call compiles
+
+
+class CompiledSteps:
+    """The step compiled per (task, policy, provider, agents, training, grad): the first step of a shape runs eager
+    and records its random draws; later steps draw the same way outside the compiled region and pass the draws in
+    (torch.Generator draws break a compiled graph), so the numbers are eager's up to float rounding of the fused
+    kernels; dropout keeps eager's random stream (inductor's fallback_random). The batch axis is dynamic, the
+    agent count static (few values: one compile each)."""
+
+    def __init__(self) -> None:
+        self.shapes: dict[tuple, _Shape] = {}
+
+    def step(self, env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState, rng: Rng, t: int
+             ) -> Step:
+        import torch
+
+        key = (id(env), id(policy), id(comm), type(state), state.n_agents, state.pos.device, policy.training,
+               torch.is_grad_enabled(), state.pos.requires_grad)
+        shape = self.shapes.get(key)
+        if shape is None or comm_module(comm) is not None:  # a trainable provider keeps decisions: eager
+            return self._record(key, env, policy, comm, state, rng, t)
+        if shape.fn is None:
+            return eager_step(env, policy, comm, state, rng, t)
+        drawn = [getattr(rng, m)(state.batch, *s) for m, s in shape.plan]
+        for x in (*drawn, *_tensors(state)):
+            if x.dim():
+                torch._dynamo.maybe_mark_dynamic(x, 0)
+        t0 = time.perf_counter()
+        try:
+            out = shape.fn(state, drawn)
+        except Exception as e:  # noqa: BLE001 - any compiler failure: one line, then the eager step
+            compiling.fall_back(f"the step did not compile ({type(e).__name__}: {str(e).splitlines()[0][:160]})"
+                                if str(e) else f"the step did not compile ({type(e).__name__})")
+            return eager_step(env, policy, comm, state, _Replay(drawn), t)  # the same draws: eager's numbers
+        if shape.fresh:
+            shape.fresh = False
+            compiling.compiled(time.perf_counter() - t0)
+            log.info("compiled the step for %d agents in %.1f s", state.n_agents, time.perf_counter() - t0)
+        return dataclasses.replace(out, t=t)
+
+    def _record(self, key: tuple, env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState,
+                rng: Rng, t: int) -> Step:
+        """The first step of a shape, eager (its numbers are the eager step's): its draws become the plan."""
+        rec = _Recording(rng)
+        _Watched.read_step = False
+        out = eager_step(env, policy, comm, state, rec, t, context=_Watched)  # type: ignore[arg-type]
+        if comm_module(comm) is not None:
+            return out
+        if _Watched.read_step:
+            fn = None
+            log.info("compile=on: the provider %s reads the time step; its steps run eager",
+                     getattr(comm, "name", type(comm).__name__))
+        else:
+            fn = _compile(env, policy, comm)
+        self.shapes[key] = _Shape([(m, s) for m, _, s in rec.plan], fn)
+        return out
+
+
+def _tensors(state: TaskState) -> list[Tensor]:
+    import torch
+
+    return [v for f in dataclasses.fields(state) if isinstance(v := getattr(state, f.name), torch.Tensor)]
+
+
+def _compile(env: Task, policy: CommTransformer, comm: CommProvider) -> Callable:
+    """The step of (env, policy, comm) as one compiled function of (state, draws) -> Step (t = 0: the provider
+    was seen not to read it)."""
+    import torch
+    import torch._inductor.config as inductor
+
+    inductor.fallback_random = True  # dropout draws from torch's own generator, as eager does
+    torch._dynamo.config.recompile_limit = max(torch._dynamo.config.recompile_limit, 64)
+
+    def core(state: TaskState, drawn: list[Tensor]) -> Step:
+        return eager_step(env, policy, comm, state, _Replay(drawn), 0)  # type: ignore[arg-type]
+
+    return torch.compile(core, dynamic=False)
+
+
+_COMPILED = CompiledSteps()
+"""the process's compiled steps (compile=on): one entry per bucket shape seen"""
+
+
+def reset_compiled() -> None:
+    """Forget every compiled step (tests; a new policy object gets its own entries anyway)."""
+    _COMPILED.shapes.clear()

@@ -20,7 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 """command-line name -> (module and primary config name, one-line help)"""
 
-_RUN = ("seed", "runs_root", "device", "threads", "cpu_kernels", "progress")
+_RUN = ("seed", "runs_root", "device", "threads", "cpu_kernels", "compile", "progress")
 """what every command that runs models reads"""
 USES: dict[str, tuple[str, ...]] = {
     "train": ("task", "budget", "baseline", "rules", *_RUN, "overwrite", "logger", "model", "optim", "rl"),

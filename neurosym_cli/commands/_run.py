@@ -199,6 +199,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
             import torch  # only here: show-program must not pay for importing torch
 
             torch.set_num_threads(typed.threads)
+        from ..utils.compiling import configure
+
+        configure(typed.compile, typed.device)  # the step compiled or eager (step.py), recorded in runtime
         result = fn(typed, info)
     except Exception as e:
         msg = _problem(e)

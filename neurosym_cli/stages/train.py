@@ -24,6 +24,7 @@ from ..run.commands import missing_chain
 from ..run.models import baseline_comm, check_memory, comm_identity, load_gate
 from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
+from ..utils.compiling import refuse_other_compile
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
@@ -179,6 +180,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, *, ini
             raise ConfigError(f"{ckpt} was trained for {state.step} steps under cpu_kernels={kernels}, this run has "
                               f"cpu_kernels={cfg.cpu_kernels}: resume it with cpu_kernels={kernels}, or pass "
                               "overwrite=true to train it from the start under this one")
+        refuse_other_compile(payload, ckpt, state.step)
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
     else:

@@ -275,8 +275,10 @@ def runtime() -> dict[str, object]:
     capability, the variables of the pin, which of MKL's code paths ran ("intel": the shim was loaded or the CPU is
     an Intel one; "vendor": MKL's own path for another vendor; "unknown": the vendor cannot be read; None: not x86)
     and whether this process loaded the shim, the torch version, and the CPU (vendor, model, machine, AVX2 and
-    AVX-512F)."""
+    AVX-512F), and the compile mode of the step."""
     import torch
+
+    from . import compiling
 
     flags = cpu_flags()
     return {
@@ -292,4 +294,5 @@ def runtime() -> dict[str, object]:
         "machine": platform.machine(),
         "avx2": "avx2" in flags if flags else None,
         "avx512f": "avx512f" in flags if flags else None,
+        "compile": compiling.record(),  # compile=: asked, in effect, why not, compile seconds (utils/compiling.py)
     }

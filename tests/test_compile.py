@@ -1,0 +1,152 @@
+"""compile=auto|on|off (utils/compiling.py, step.py): the compiled step gives eager's losses and gradients up to
+float rounding on the paper's tasks, falls back to the eager step in one line where it cannot compile, is recorded
+in every artifact's runtime, and a resume under another compile mode is refused."""
+
+import pytest
+import torch
+
+from neurosym_cli import step as stepmod
+from neurosym_cli.config import ConfigError, ModelConfig, RunConfig
+from neurosym_cli.policy import CommTransformer
+from neurosym_cli.policy.comm import CommBase, FullComm, NearestComm
+from neurosym_cli.rollout import rollout
+from neurosym_cli.tasks import make_task
+from neurosym_cli.tasks.base import Rng
+from neurosym_cli.tasks.random_cross import CrossConfig
+from neurosym_cli.tasks.random_grid import GridConfig
+from neurosym_cli.tasks.unlabeled_goals import UnlabeledConfig
+from neurosym_cli.utils import compiling
+from neurosym_cli.utils.cpu import runtime
+
+TASKS = {"random-cross": lambda: CrossConfig(name="random-cross"),
+         "two-groups-cross": lambda: CrossConfig(name="two-groups-cross", num_groups=2),
+         "random-grid": lambda: GridConfig(name="random-grid"),
+         "unlabeled-goals": lambda: UnlabeledConfig(name="unlabeled-goals")}
+
+
+@pytest.fixture(autouse=True)
+def _eager_after():
+    """Each test leaves the process as it found it: eager, no compiled steps kept."""
+    saved = dict(compiling._state)
+    yield
+    compiling._state.clear()
+    compiling._state.update(saved)
+    stepmod.reset_compiled()
+
+
+def _losses_and_grads(task, mode, comm=None, steps=3, batch=3):
+    """Train-mode rollout of one bucket (dropout on) under compile=mode -> (loss, per-parameter gradients)."""
+    compiling.configure(mode)
+    env = make_task(task, horizon=steps)
+    torch.manual_seed(0)
+    policy = CommTransformer.for_task(env, ModelConfig())
+    gen = torch.Generator().manual_seed(3)
+    bucket = env.reset(batch, gen)[0]
+    traj = rollout(env, policy, comm or FullComm(), bucket, Rng(gen), steps, stats=False)
+    loss = traj.cost.sum() / (batch * steps)
+    loss.backward()
+    return float(loss.detach()), [p.grad.clone() for p in policy.parameters()]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(TASKS))
+def test_compiled_gradients_agree_with_eager(name):
+    # three steps: t=0 (a state without grad) and t=1 run eager and record the draws, t=2 runs compiled
+    loss_e, grads_e = _losses_and_grads(TASKS[name](), "off")
+    loss_c, grads_c = _losses_and_grads(TASKS[name](), "on")
+    assert compiling.record()["in_effect"] == "on" and compiling.record()["shapes_compiled"] == 1
+    assert loss_c == pytest.approx(loss_e, rel=1e-5)
+    for ge, gc in zip(grads_e, grads_c):
+        torch.testing.assert_close(gc, ge, rtol=1e-4, atol=1e-6)
+
+
+def test_off_and_auto_run_the_eager_step(monkeypatch):
+    monkeypatch.setattr(stepmod, "_compile", lambda *a: pytest.fail("compile=off must not compile"))
+    for mode in ("off", "auto"):
+        assert compiling.configure(mode) is False
+        _losses_and_grads(TASKS["random-cross"](), mode)
+        assert compiling.record()["asked"] == mode and compiling.record()["in_effect"] == "off"
+
+
+def test_failed_compilation_says_one_line_and_gives_eager_numbers(monkeypatch, capsys):
+    loss_e, grads_e = _losses_and_grads(TASKS["random-cross"](), "off")
+
+    def broken(*_):
+        def fn(*_a):
+            raise RuntimeError("InductorError: no compiler here\nmore lines")
+        return fn
+
+    monkeypatch.setattr(stepmod, "_compile", broken)
+    loss_c, grads_c = _losses_and_grads(TASKS["random-cross"](), "on")
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compile=on" in err[0] and "no compiler here" in err[0] and "eager" in err[0]
+    assert loss_c == loss_e  # the same draws handed to the eager step: bit for bit
+    assert all(torch.equal(a, b) for a, b in zip(grads_e, grads_c))
+    assert compiling.record()["in_effect"] == "off" and "did not compile" in compiling.record()["why_off"]
+
+
+def test_no_cxx_compiler_is_one_line_and_eager(monkeypatch, capsys):
+    monkeypatch.setattr(compiling, "compiler", lambda: None)
+    assert compiling.configure("on", "cpu") is False
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no C++ compiler" in err[0]
+    rec = runtime()["compile"]
+    assert rec["asked"] == "on" and rec["in_effect"] == "off" and "no C++ compiler" in rec["why_off"]
+
+
+def test_a_provider_that_reads_the_time_step_runs_eager(monkeypatch):
+    class Timed(CommBase):
+        name = "timed"
+
+        def picks(self, ctx, round):
+            n = ctx.obs.agent.shape[1]
+            b = ctx.obs.agent.shape[0]
+            return ((torch.arange(n) + 1 + ctx.step) % n).view(1, n, 1).expand(b, n, 1)
+
+    monkeypatch.setattr(stepmod, "_compile", lambda *a: pytest.fail("a time-dependent provider must stay eager"))
+    loss_e, _ = _losses_and_grads(TASKS["random-cross"](), "off", comm=Timed())
+    loss_c, _ = _losses_and_grads(TASKS["random-cross"](), "on", comm=Timed())
+    assert loss_c == loss_e
+    assert all(s.fn is None for s in stepmod._COMPILED.shapes.values())
+
+
+def test_recorded_draws_are_replayed_in_order():
+    gen = torch.Generator().manual_seed(5)
+    rec = stepmod._Recording(Rng(gen))
+    a, b = rec.randn(2, 3), rec.rand(2, 4)
+    assert rec.plan == [("randn", 2, (3,)), ("rand", 2, (4,))]
+    replay = stepmod._Replay([a, b])
+    assert replay.randn(2, 3) is a and replay.rand(2, 4) is b
+
+
+def test_compile_key_is_typed():
+    assert RunConfig.__dataclass_fields__["compile"].default == "auto"
+    with pytest.raises(ConfigError, match="unknown compile 'fast'"):
+        RunConfig(cmd="train", exp_dir="outputs/x", compile="fast")
+
+
+@pytest.mark.parametrize("was,now", [("on", "off"), ("off", "on")])
+def test_resume_under_another_compile_mode_is_refused(was, now, monkeypatch):
+    monkeypatch.setattr(compiling, "compiler", lambda: "g++")
+    compiling.configure(now)
+    payload = {"runtime": {"compile": {"asked": was, "in_effect": was}}}
+    with pytest.raises(ConfigError, match=f"compiled {was}.*this run has it {now}.*resume it with compile={was}"):
+        compiling.refuse_other_compile(payload, "model.pt", 7)
+    compiling.refuse_other_compile({"runtime": {"compile": {"asked": now, "in_effect": now}}}, "model.pt", 7)
+
+
+def test_a_checkpoint_from_before_the_key_resumes_eager_only(monkeypatch):
+    compiling.configure("off")
+    compiling.refuse_other_compile({"runtime": {"cpu_kernels": "avx2"}}, "model.pt", 3)  # no record: eager
+    monkeypatch.setattr(compiling, "compiler", lambda: "g++")
+    compiling.configure("on")
+    with pytest.raises(ConfigError, match="compile=off"):
+        compiling.refuse_other_compile({}, "model.pt", 3)
+
+
+def test_nearest_provider_records_its_plan_without_compiling(monkeypatch):
+    """The sparse path (picks before any logit) records its draws like the dense one: one noise draw a step."""
+    monkeypatch.setattr(stepmod, "_compile", lambda *a: (lambda *b: pytest.fail("not called at two steps")))
+    _losses_and_grads(TASKS["random-cross"](), "on", comm=NearestComm(2), steps=2)
+    shapes = stepmod._COMPILED.shapes
+    assert shapes and all(s.plan == [("randn", (key[4], key[4], 2))] for key, s in shapes.items())
