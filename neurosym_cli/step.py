@@ -199,8 +199,12 @@ def _compile(env: Task, policy: CommTransformer, comm: CommProvider) -> Callable
     def core(state: TaskState, drawn: list[Tensor]) -> Step:
         return eager_step(env, policy, comm, state, _Replay(drawn), 0)  # type: ignore[arg-type]
 
-    return torch.compile(core, dynamic=False)
+    return torch.compile(core, **OPTIONS)
 
+
+OPTIONS: dict = {"dynamic": False}
+"""torch.compile's options for the step (the batch axis is marked dynamic where it is called; benchmarks try
+others, e.g. mode="reduce-overhead" for CUDA graphs)"""
 
 _COMPILED = CompiledSteps()
 """the process's compiled steps (compile=on): one entry per bucket shape seen"""
