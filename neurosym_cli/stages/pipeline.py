@@ -78,7 +78,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
             took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
         # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
-        name = stage.name + (f" {Path(program).stem}" if program else "")
+        name = stage.name + (f" {Path(stage_cfg.program).stem}" if stage_cfg.program else "")  # a pick's own
         timings[name] = round(took if stage.verb == "eval" else max(took, timings.get(name, 0.0)), 1)
         write_json(timing_file, timings)
         return result
@@ -88,6 +88,9 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         from .front_select import select_front
 
         chosen = str(select_front(cfg, run))
+    elif cfg.pipeline.select == "front":
+        log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
+                    "program; the front is not chosen among")
     for k, stage in enumerate(stages, start=1):
         log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
                  clock(time.perf_counter() - t0))
