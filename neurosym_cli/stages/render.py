@@ -96,7 +96,8 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
 
 
 def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
-    return dataclasses.replace(cfg, baseline=with_run(cfg, name))
+    b = with_run(cfg, name)  # program= (the pipeline's front pick) is the program baselines' alone
+    return dataclasses.replace(cfg, baseline=b, program=cfg.program if b.has_program else "")
 
 
 def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, EpisodeRecord]]:
