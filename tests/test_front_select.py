@@ -132,3 +132,10 @@ def test_the_guard_reads_the_front_pick_label():
     assert line and "prog-retrained-file-k2-lam0.25-v1-scaled-b0" in line and "is silent" in line
     rows[-1] = ("prog-retrained-file-k2-lam0.25-v1-scaled-b3-0123abcd-v1", s(3.5, 3.0))
     assert communication_guard(rows) is None
+
+
+def test_a_front_pick_is_the_method_outcome_per_seed_in_reports():
+    from neurosym_cli.run.layout import is_front_pick
+
+    assert is_front_pick("outputs/two-groups-cross/quick/seed1/select/front/k5-lam0.5-v1-b3.txt")
+    assert not is_front_pick("") and not is_front_pick("my/front/program.txt") and not is_front_pick("prog.txt")

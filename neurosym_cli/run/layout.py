@@ -317,6 +317,13 @@ class RunDir(_Folder):
         return self.root / EXPORT / self.label
 
 
+def is_front_pick(program: str | Path) -> bool:
+    """Whether a program path is one of a front's candidate files (select/front/<tag>-b<budget>.txt): a run's
+    pipeline.select=front pick, which differs per training seed as select's pick does."""
+    p = Path(program)
+    return bool(str(program)) and p.parent.name == FRONT_SELECT and p.parent.parent.name == SELECT
+
+
 def metrics_files(exp_dir: Path) -> list[Path]:
     """metrics.json of every baseline evaluated in the run directory ``exp_dir``, sorted."""
     return RunFolder(exp_dir).metrics_files()

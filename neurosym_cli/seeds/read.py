@@ -11,7 +11,7 @@ from typing import Any, Iterable, Sequence
 
 from .. import stats
 from ..errors import ConfigError
-from ..run.layout import RunFolder
+from ..run.layout import RunFolder, is_front_pick
 from ..utils.io import ArtifactError
 
 SHARED = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
@@ -173,7 +173,9 @@ def from_run_dir(seed_dir: Path, task: str = "") -> SeedRun | None:
     for f, b, label, c, per_seed in raw:
         key = _key_of(b, by_baseline[b], pick, label, c)
         picked = bool(c.get("selected")) or (pick is not None and all(c.get(k) == pick[k] for k in pick))
-        flat = {"picked by select": picked, **{k: v for k, v in flatten(c).items() if not _ignored(k, picked)}}
+        front = is_front_pick(c.get("program") or "")  # pipeline.select=front's pick: the method's outcome per seed
+        flat = {"picked by select": picked, **{k: v for k, v in flatten(c).items()
+                                               if not _ignored(k, picked) and not (front and k == "program")}}
         entries[key] = Entry(label, _rows(per_seed, str(f), f"delete it and run {_remake(seed_dir, 'eval', files)} "
                                           "for that baseline, or leave this seed out of report_dir"), flat)
         seed = c.get("seed", seed)
