@@ -7,10 +7,16 @@
 For each task, D is collected as `neurosym synth` collects it, from the oracle under --runs-root, with --rollouts
 rollouts at the task's own horizon (budget=quick's D; a tiny budget's D has a handful of states). For each search
 seed, MCMC runs the configured schedule of --steps proposals (synth's defaults: 4 restarts, final 20 %); its wall
-time T is then the hybrid's budget (phases shared as the steps are). Each search gets a fresh scorer of round 1
-(nothing cached from the other), after one warm-up scorer has compiled the kernels. Printed per task and seed:
+time T is then the hybrid's budget (phases shared as the steps are). Each search gets a fresh scorer of the first
+round (nothing cached from the other), after one warm-up scorer has compiled the kernels. Printed per task and seed:
 the best objective each reached, evaluations to target (scored programs until each first reached MCMC's final
 objective; '-' never), and proposals/s (scored programs per second; the hybrid's cache hits are not counted).
+
+Measured (tiny oracles, D of 60 rollouts, 1,500 MCMC steps, search seeds 0-2, 2 shared CPU cores; mean best
+objective MCMC -> hybrid, hybrid better in): two-groups-cross 4.591 -> 4.069 (3 of 3), random-cross 8.231 -> 7.355
+(3 of 3), random-grid 12.456 -> 11.761 (3 of 3), unlabeled-goals 3.032 -> 2.761 (3 of 3), ring 1.000 -> 0.989
+(3 of 3); median evaluations to MCMC's final objective: MCMC 1240, 1296, 954, 1227, 377; hybrid 173, 138, 450, 838,
+117.
 """
 
 from __future__ import annotations
