@@ -77,6 +77,7 @@ def main() -> None:
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
     ap.add_argument("--batches", default="50,256,1024,4096", help="--device cuda: the batch sizes")
+    ap.add_argument("--modes", default="eager,compiled,captured", help="--device cuda: the modes (eager first)")
     ap.add_argument("--json", default="", help="also write the rows here")
     args = ap.parse_args()
     env = make_task(CrossConfig(name="random-cross"), horizon=args.horizon)
@@ -88,13 +89,15 @@ def main() -> None:
         torch.backends.cudnn.allow_tf32 = False
         dev = torch.device("cuda")
         for b in (int(x) for x in args.batches.split(",")):
-            runs = [train(env, m, batch=b, horizon=args.horizon, steps=args.steps, device=dev, options=o)
-                    for m, o in (("eager", None), ("compiled", {"dynamic": False}),
-                                 ("captured", {"dynamic": False, "mode": "reduce-overhead"}))]
+            modes = {"eager": None, "compiled": {"dynamic": False},
+                     "captured": {"dynamic": False, "mode": "reduce-overhead"}}
+            runs = [train(env, m, batch=b, horizon=args.horizon, steps=args.steps, device=dev, options=modes[m])
+                    for m in args.modes.split(",")]
             for r in runs:
                 rows.append({"device": "cuda", "batch": b, **{k: r[k] for k in ("mode", "rollouts_per_s", "first_s")},
                              "vs_eager": r["rollouts_per_s"] / runs[0]["rollouts_per_s"],
-                             "loss_rel_diff": agreement(runs[0]["losses"], r["losses"])})
+                             "loss_rel_diff": agreement(runs[0]["losses"], r["losses"]),
+                             "in_effect": r["compile"]["in_effect"], "why_off": r["compile"]["why_off"]})
                 print(json.dumps(rows[-1]), flush=True)
     else:
         dev = torch.device("cpu")
