@@ -47,7 +47,12 @@ def seed_record(exp: Path) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs_root", help="the runs root the main job ran in")
+    ap.add_argument("--out", default=str(OUT), help="where the small result files go (default docs/results/main-job)")
+    ap.add_argument("--figure", default=str(ROOT / "docs" / "figures" / "main-job-seeds.png"),
+                    help="where the seeds' loss-degree plane goes")
+    ap.add_argument("--command", default="", help="the pipeline's overrides beyond task and seed, as run (recorded)")
     a = ap.parse_args()
+    out = Path(a.out)
     base = Path(a.runs_root) / TASK / BUDGET
     seeds = sorted(int(p.name[4:]) for p in base.glob("seed*") if p.name[4:].isdigit())
     if not seeds:
@@ -58,33 +63,61 @@ def main() -> None:
                         f"runs_root={a.runs_root}"], env=env, capture_output=True, text=True)
     if p.returncode != 0:
         raise SystemExit(f"neurosym report failed: {p.stderr.strip().splitlines()[-1:]}")
-    OUT.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     for name in ("report.json", "report.csv", "improvement.csv"):
-        shutil.copyfile(base / name, OUT / name)
-    shutil.copyfile(base / f"seeds-{TASK}.png", ROOT / "docs" / "figures" / "main-job-seeds.png")
+        shutil.copyfile(base / name, out / name)
+    shutil.copyfile(base / f"seeds-{TASK}.png", Path(a.figure))
     from run_seeds import machine  # the oracle manifest's runtime record (this script's folder is on sys.path)
 
-    record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))}",
+    record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))} {a.command}".strip(),
               "date": datetime.date.today().isoformat(),
               "machine": {**machine(base / f"seed{seeds[0]}"), "cores": os.cpu_count(),
                           "processor": platform.machine(), "threads": "0 (torch's default: the cores)"},
               "note": "per training seed: each baseline's summary over 20 evaluation seeds (mean, std ddof 1, "
                       "ci95 = 95 % t half-width, n)",
               "seeds": {str(s): seed_record(base / f"seed{s}") for s in seeds}}
-    (OUT / "seeds.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
-    across = json.loads((OUT / "report.json").read_text())["tasks"][TASK]["baselines"]
-    print(f"wrote {OUT}/ and docs/figures/main-job-seeds.png")
+    old = out / "seeds.json"
+    if old.exists():  # seeds run in earlier sessions (run directories are not kept between them) stay
+        before = json.loads(old.read_text())
+        kept = {s: r for s, r in before.get("seeds", {}).items() if s not in record["seeds"]}
+        if kept and before.get("command", "").split(" -m ")[-1].split(" ", 1)[1:] == \
+                record["command"].split(" -m ")[-1].split(" ", 1)[1:]:
+            record["seeds"] = dict(sorted({**kept, **record["seeds"]}.items(), key=lambda kv: int(kv[0])))
+            record["report_covers"] = [str(s) for s in seeds]  # report.json: the seeds of this runs root only
+    (out / "seeds.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
+    across = json.loads((out / "report.json").read_text())["tasks"][TASK]["baselines"]
+    print(f"wrote {out}/ and {a.figure}")
     print(f"loss per seed {' / '.join(map(str, seeds))}; across seeds mean ± 95 % t half-width, max in per seed")
     for b in QUOTED:
         per, deg = [], []
         for s in seeds:
             m = record["seeds"][str(s)]["baselines"]
-            label = next((k for k in m if k == b or k.startswith(b + "-k")), None)
+            label = label_of(m, b)
             per.append(f"{m[label]['cost']['mean']:.3f}" if label else "-")
             deg.append(f"{m[label]['max_in']['mean']:.2f}" if label else "-")
         c = across.get(b, {}).get("cost")
         print(f"  {b:20s} {' / '.join(per)}   across {c['mean']:.2f} ± {c['ci95']:.2f}   max in {' / '.join(deg)}"
               if c else f"  {b:20s} {' / '.join(per)}")
+    near = within(record, "prog-retrained", "tf-full", 0.05)
+    print(f"prog-retrained within 5 % of tf-full's loss on {sum(near.values())} of {len(near)} seeds "
+          f"({', '.join(str(s) for s, ok in near.items() if not ok) or 'none'} outside)")
+
+
+def label_of(baselines: dict, name: str) -> str | None:
+    """The evaluation label of baseline ``name`` in one seed's record (labels carry k, the program's tag or its
+    content after the name)."""
+    return next((k for k in baselines if k == name or k.startswith(name + "-k") or k.startswith(name + "-")
+                 and not any(k.startswith(o + "-") for o in QUOTED if o != name and o.startswith(name))), None)
+
+
+def within(record: dict, a: str, b: str, frac: float) -> dict[str, bool]:
+    """Per seed: is baseline ``a``'s mean loss at most (1 + frac) x ``b``'s?"""
+    out = {}
+    for s, r in record["seeds"].items():
+        la, lb = label_of(r["baselines"], a), label_of(r["baselines"], b)
+        if la and lb:
+            out[s] = r["baselines"][la]["cost"]["mean"] <= (1 + frac) * r["baselines"][lb]["cost"]["mean"]
+    return out
 
 if __name__ == "__main__":
     main()

@@ -5,13 +5,14 @@ budget); `neurosym show-program` prints it."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..config import RunConfig
-from ..synth.front import default_budgets, search_front
-from ..synth.objective import CachedScorer
-from ..synth.search import RoundSpec
 from ..utils.io import read_json, write_csv, write_json
-from ..utils.seeding import STREAM_SYNTH, generator
+
+if TYPE_CHECKING:  # show-program reads a front without torch: the search is imported where it runs
+    from ..synth.objective import CachedScorer
+    from ..synth.search import RoundSpec
 
 FRONT_STREAM = 400
 """the generator stream of round r's front is (STREAM_SYNTH, FRONT_STREAM + r): none the single-lam search reads"""
@@ -22,6 +23,9 @@ def round_front(cfg: RunConfig, spec: RoundSpec, scorer: CachedScorer, archive: 
     """One round's front: {round, l1_silent, steps, budgets: [rows of synth.front.search_front]}. ``make_scorer``
     (objective -> CachedScorer on the same D and random numbers) builds a max in+out scorer when the search's own
     counts the hinge."""
+    from ..synth.front import default_budgets, search_front
+    from ..utils.seeding import STREAM_SYNTH, generator
+
     front_scorer = make_scorer("paper") if scorer.form.hinge else scorer
     n_max = max(d.n for d in scorer.data)
     budgets = sorted(set(cfg.synth.front_budgets)) or default_budgets(cfg.rules, n_max)
