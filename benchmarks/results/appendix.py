@@ -5,6 +5,7 @@ from __future__ import annotations
 from neurosym_cli.dsl import parse
 
 from .claims import Claim, of_family
+from .collect import VMAS_SEARCH
 from .figures import vmas_order
 from .files import DOCS, FIGURES, ORDER, RESULTS, read, with_selected
 from .tables import EVAL_PM, gap, mean, ms, paired, pm, readings, shown, verdict
@@ -145,7 +146,7 @@ def vmas(task: str) -> str:
         label = png.name.removeprefix(f"{name}-").removesuffix("-episode0.png")
         gif = png.with_suffix(".gif")
         out += ["", f"Evaluation episode 0 under {label} at its start, two evenly spaced steps and its end, each "
-                f"frame with the edges used at that step (`neurosym render task={task} budget=vmas "
+                f"frame with the edges used at that step (`neurosym render task={task} budget=vmas {VMAS_SEARCH} "
                 f"baseline={labels[label]} episode=0`" + (f"; animated: [{gif.name}](figures/{gif.name})"
                                                          if gif.exists() else "") + "):", "",
                 f"![{task}: episode 0 under {label}](figures/{png.name})"]

@@ -129,7 +129,10 @@ def collect_noisy(exp: Path) -> None:
 
 
 VMAS_METRICS = METRICS + ("on_goal", "covered", "success")
-VMAS_COMMAND = ("neurosym pipeline task={task} budget=vmas threads=1 plots=false "
+VMAS_SEARCH = "lam=0.5 synth.objective=paper"
+"""the search of the committed VMAS runs: the paper's objective at lambda-tilde 0.5 (their task YAMLs set it then;
+today a task without its own gets synth.objective=scaled at 0.25), so every command reaching their programs names it"""
+VMAS_COMMAND = ("neurosym pipeline task={task} budget=vmas threads=1 plots=false " + VMAS_SEARCH + " "
                 "\"baselines=[tf-full,hard-attn,dist,prog,prog-retrained,expo,comm-range,no-comm]\" "
                 "baseline=comm-range baseline.radius=0.5")
 """the command whose run a VMAS result file holds (docs/vmas.md, 'Results')"""
