@@ -181,10 +181,12 @@ class SynthConfig:
     temperature: float = 0.1
     """Metropolis temperature relative to the current objective: accept a worse program with
     probability exp(-(new - cur) / (temperature * |cur|)) (reference: 0.1)"""
-    objective: str = "paper"
-    """paper: L1 + lam * max_i(in + out) in the task's action units; hinge: L1 + lam * (relu(max in - K) +
-    relu(max out - K)) (reference); scaled: L1 / L1(silence on D) + lam * max_i(in + out) / 2K, one lam for every
-    task (silence scores 1). Composed, it is the task's ``objective`` (degrees.OBJECTIVES; docs/extending.md)"""
+    objective: str = TaskConfig.objective
+    """the synthesis objective's form, composed from the task's ``objective`` (the paper's tasks: paper; every
+    other: scaled): scaled (L1 / L1(silence on D) + lam * max_i(in + out) / 2K, silence scores 1, one lam for every
+    task), paper (L1 + lam * max_i(in + out), L1 in the task's action units) or hinge (L1 + lam * (relu(max in - K)
+    + relu(max out - K)), the reference's). degrees.OBJECTIVES; docs/fidelity.md, 'Trade-off in the task's own
+    units'"""
     random_samples: int = 1
     """samples of every random rule used to estimate the expected objective (common random numbers)"""
     max_depth: int = 2
@@ -244,8 +246,9 @@ class RunConfig:
     """training seed: fixes numpy, torch, env sampling and dropout"""
     rules: int = 2
     """K: number of program rules, also k of hard-attn and dist (paper section 4: K = d0)"""
-    lam: float = 0.5
-    """paper's lambda-tilde: weight of the degree term in the synthesis objective"""
+    lam: float = TaskConfig.lam
+    """weight of the degree term in synth.objective's units, composed from the task's ``lam`` (the paper's tasks:
+    their lambda-tilde, cross 0.5, grid 0.5, unlabeled 0.7; every other: the scaled objective's 0.25)"""
     features: str = "v1"
     """program feature map: v1 (vectors, norms, angles) or v2 (plus quadratic terms)"""
     program: str = ""

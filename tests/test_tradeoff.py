@@ -9,10 +9,11 @@ from hydra import compose, initialize_config_module
 
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
 from neurosym_cli.commands._run import typed_config
-from neurosym_cli.config import ModelConfig
+from neurosym_cli.config import ModelConfig, RunConfig, SynthConfig, TaskConfig
 from neurosym_cli.dsl import ArgMaxRule, Linear, RandomRule, TrueCond
 from neurosym_cli.dsl.interpret import picks_to_mask, rule_picks
 from neurosym_cli.dsl.sampling import SearchSpace, propose, random_rules
+from neurosym_cli.helptext import command_help
 from neurosym_cli.policy import CommTransformer
 from neurosym_cli.stages.guard import communication_guard
 from neurosym_cli.synth.dataset import DataBucket, collect
@@ -134,6 +135,22 @@ def test_tasks_that_state_no_objective_get_the_scaled_one_and_the_papers_keep_th
     for task in ("swarm", "vmas/navigation"):
         cfg = synth_cfg(task)
         assert (cfg.synth.objective, cfg.lam) == ("scaled", 0.25), task
+    assert (RunConfig.lam, SynthConfig.objective) == (TaskConfig.lam, TaskConfig.objective) == (0.25, "scaled")
+
+
+def test_help_of_a_task_without_its_own_trade_off_shows_the_scaled_default_and_its_meaning():
+    def help_of(task):
+        with initialize_config_module("neurosym_cli.conf", version_base="1.3"):
+            cfg = typed_config(compose("synth", overrides=[f"task={task}"]))
+        return " ".join(command_help("synth", cfg, lambda g: []).split())
+
+    out = help_of("swarm")
+    assert "lam=0.25 weight of the degree term in synth.objective's units" in out
+    assert "synth.objective=scaled the synthesis objective's form" in out
+    assert all(form in out for form in ("scaled (L1 / L1(silence on D)", "paper (L1 + lam", "hinge (L1 + lam"))
+    assert "lambda-tilde: weight" not in out  # the paper's name is not the meaning of every task's lam
+    out = help_of("two-groups-cross")
+    assert "lam=0.5 weight of the degree term" in out and "synth.objective=paper the synthesis" in out
 
 
 # ------------------------------------------------------------------------------------------ the front
@@ -184,14 +201,66 @@ def _row(label, cost, ci=0.1, degree=4.0):
     return (label, {"cost": {"mean": cost, "ci95": ci}, "max_degree": {"mean": degree, "ci95": 0.0}})
 
 
+LABELS = ("prog-retrained-k2-lam0.5-v1", "prog-k2-lam0.5-v1")
+"""the run's own program labels, as results.print_table passes them"""
+
+
 def test_the_guard_fires_when_communication_helps_and_the_program_is_silent_or_worse():
     rows = [_row("tf-full", 3.66), _row("prog-k2-lam0.5-v1", 6.5, degree=0.0),
             _row("prog-retrained-k2-lam0.5-v1", 6.08, degree=0.0), _row("no-comm", 4.55, degree=0.0)]
-    line = communication_guard(rows, "neurosym synth baseline=prog task=mine budget=quick seed=0")
+    line = communication_guard(rows, labels=LABELS, rerun="neurosym synth baseline=prog task=mine budget=quick seed=0")
     assert line and "\n" not in line
     assert "prog-retrained-k2-lam0.5-v1 is silent" in line and "synth.front=true" in line and "smaller lam" in line
     worse = [_row("tf-full", 3.66), _row("prog-retrained-k2-lam0.5-v1", 4.9, degree=3.0), _row("no-comm", 4.55)]
-    assert "does no better than no-comm" in communication_guard(worse)
+    assert "does no better than no-comm" in communication_guard(worse, labels=LABELS)
+
+
+def test_the_guard_judges_the_runs_own_program_not_the_first_label_in_sort_order():
+    # a user's program= file and an older single-lam result sort before the run's program: neither is judged
+    rows = [_row("tf-full", 3.66), _row("no-comm", 4.55),
+            _row("prog-retrained-file-mine-0123abcd-v1", 6.0, degree=0.0),
+            _row("prog-retrained-k2-lam0.1-v1", 6.0, degree=0.0),
+            _row("prog-retrained-k2-lam0.5-v1", 4.0, degree=3.0)]
+    assert communication_guard(rows, labels=LABELS) is None
+    rows[-1] = _row("prog-retrained-k2-lam0.5-v1", 6.2, degree=0.0)
+    line = communication_guard(rows, labels=LABELS)
+    assert line and "prog-retrained-k2-lam0.5-v1 is silent" in line and "lam0.1" not in line and "file" not in line
+    # the run's program not evaluated (yet): nothing said about another's
+    assert communication_guard(rows[:-1], labels=LABELS) is None
+
+
+def test_the_guard_suggests_no_lever_already_in_effect():
+    rows = [_row("tf-full", 3.66), _row("prog-retrained-k2-lam0.5-v1", 6.08, degree=0.0), _row("no-comm", 4.55)]
+    plain = communication_guard(rows, labels=LABELS, settings={"synth.objective": "paper", "synth.search": "mcmc",
+                                                                "synth.front": False})
+    assert "synth.objective=scaled" in plain and "synth.search=hybrid" in plain and "synth.front=true" in plain
+    scaled = communication_guard(rows, labels=LABELS, settings={"synth.objective": "scaled",
+                                                                 "synth.search": "hybrid", "synth.front": True})
+    assert scaled and "synth.objective=scaled" not in scaled and "synth.search=hybrid" not in scaled
+    assert "synth.front=true" not in scaled and "show-program" in scaled  # a higher budget of the front it has
+
+
+def test_the_guard_decides_communication_helps_by_the_paired_rule_where_per_seed_rows_exist():
+    from neurosym_cli.stages.front_select import communication_helps as front_rule
+    from neurosym_cli.stages.guard import communication_helps
+
+    assert front_rule is communication_helps  # one rule for the guard and pipeline.select=front
+    # the intervals overlap (wide, seed-to-seed spread) but no-comm is worse on every seed by about 0.5: paired, it
+    # helps; the unpaired reading said nothing
+    tf = {s: 3.0 + s for s in range(6)}
+    nc = {s: 3.5 + s + 0.01 * (s % 2) for s in range(6)}
+    rows = [_row("tf-full", 5.5, ci=2.0), _row("no-comm", 6.0, ci=2.0),
+            _row("prog-retrained-k2-lam0.5-v1", 6.5, degree=0.0)]
+    assert communication_guard(rows, labels=LABELS) is None
+    line = communication_guard(rows, labels=LABELS, per_seed={"tf-full": tf, "no-comm": nc})
+    assert line and "is silent" in line
+    # and the other way: intervals apart, but the paired differences scatter around 0 -> no line
+    rows = [_row("tf-full", 3.0, ci=0.01), _row("no-comm", 4.0, ci=0.01),
+            _row("prog-retrained-k2-lam0.5-v1", 6.5, degree=0.0)]
+    assert communication_guard(rows, labels=LABELS)
+    tf = {0: 1.0, 1: 5.0, 2: 3.0}
+    nc = {0: 5.0, 1: 1.0, 2: 3.1}
+    assert communication_guard(rows, labels=LABELS, per_seed={"tf-full": tf, "no-comm": nc}) is None
 
 
 @pytest.mark.parametrize("rows", [
@@ -201,4 +270,4 @@ def test_the_guard_fires_when_communication_helps_and_the_program_is_silent_or_w
     [_row("prog-retrained-k2-lam0.5-v1", 6.0, degree=0.0), _row("no-comm", 4.55)],  # no tf-full
 ])
 def test_the_guard_stays_quiet_otherwise(rows):
-    assert communication_guard(rows) is None
+    assert communication_guard(rows, labels=LABELS) is None
