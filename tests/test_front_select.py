@@ -128,10 +128,11 @@ def test_the_guard_reads_the_front_pick_label():
 
     rows = [("tf-full", s(3.0, 18.0)), ("no-comm", s(5.0, 0.0)),
             ("prog-retrained-file-k2-lam0.25-v1-scaled-b0-0123abcd-v1", s(5.2, 0.0))]
-    line = communication_guard(rows)
+    line = communication_guard(rows, labels=[rows[-1][0]])
     assert line and "prog-retrained-file-k2-lam0.25-v1-scaled-b0" in line and "is silent" in line
+    assert "smaller lam" not in line  # no lam chose a program= file
     rows[-1] = ("prog-retrained-file-k2-lam0.25-v1-scaled-b3-0123abcd-v1", s(3.5, 3.0))
-    assert communication_guard(rows) is None
+    assert communication_guard(rows, labels=[rows[-1][0]]) is None
 
 
 def test_a_front_pick_is_the_method_outcome_per_seed_in_reports():

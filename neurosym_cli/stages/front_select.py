@@ -38,8 +38,8 @@ from ..stats import mean_ci
 from ..utils.console import clock, log, say
 from ..utils.io import write_json
 from .front import read_front
-from .guard import SILENT
-from .select import choose, validate
+from .guard import SILENT, communication_helps
+from .validation import choose, validate
 
 SEARCH, SILENT_BASELINE = "prog", "no-comm"
 """the baseline whose search's front is chosen among, and the model that hears nobody (the rule's reference)"""
@@ -56,15 +56,6 @@ RunStage = Callable[..., Any]
 
 
 # --------------------------------------------------------------------------------------------- the rule
-def communication_helps(tf_loss: Sequence[float], nc_loss: Sequence[float]) -> tuple[bool, float, float]:
-    """(helps, mean, half-width) of no-comm - tf-full over the same validation seeds: helps when the paired 95 %
-    Student-t interval lies above 0 (hearing everybody is better than hearing nobody beyond chance)."""
-    if len(tf_loss) != len(nc_loss):
-        raise ValueError(f"tf-full and no-comm are validated on different seeds: {len(tf_loss)} vs {len(nc_loss)}")
-    d, h = mean_ci([n - t for n, t in zip(nc_loss, tf_loss)])
-    return d - h > 0, d, h
-
-
 def pick(rows: Sequence[dict[str, Any]], *, helps: bool) -> list[dict[str, Any]]:
     """The rule on validation rows (``name``, ``loss`` per validation seed, ``degree``: mean max in+out over them).
 

@@ -95,7 +95,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
                  clock(time.perf_counter() - t0))
         results[f"{stage.verb}:{stage.baseline}"] = run(stage, chosen if stage.baseline in FRONT_RUNS else "")
-    print_table(cfg)
+    print_table(cfg, program=chosen)
     from ..config import UserError
     from .render import make_figures
 

@@ -17,7 +17,7 @@ from ..run.layout import FIGURES, history_files, metrics_files
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
-from .guard import communication_guard
+from .guard import PROGRAM_PREFIXES, communication_guard
 
 COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
            ("collisions", "collisions")]
@@ -137,11 +137,41 @@ def write_figure(cfg: RunConfig) -> Path:
                    RunDir(cfg).eval_root / "figure2.png", err="ci95")
 
 
-def print_table(cfg: RunConfig) -> None:
-    """The results table of every baseline evaluated in this experiment directory, and its plot."""
+def _guard_inputs(cfg: RunConfig, program: str) -> tuple[list[str], dict[str, dict[int, float]]]:
+    """The guard's inputs from this run directory: the labels of the run's own program baselines (under
+    ``program``, "" for the searched one; prog-retrained's first) and tf-full's and no-comm's loss per evaluation
+    seed (their metrics.json's per-seed rows, for the paired rule)."""
+    import dataclasses
+
+    from ..config import UserError
+
+    labels = []
+    for name in PROGRAM_PREFIXES:
+        try:
+            labels.append(RunDir(dataclasses.replace(cfg, baseline=schemes.get(name), program=program)).label)
+        except (UserError, OSError):  # a program file gone since its evaluation: no label of this run to judge
+            continue
+    per_seed = {}
+    for label in ("tf-full", "no-comm"):
+        f = RunDir(cfg).metrics_of(label)
+        if f.exists():
+            rows = _metrics(f, pipeline_command(cfg)).get("per_seed") or []
+            per_seed[label] = {r["seed"]: float(r["cost"]) for r in rows if isinstance(r, dict)
+                               and isinstance(r.get("seed"), int) and isinstance(r.get("cost"), (int, float))}
+    return labels, per_seed
+
+
+def print_table(cfg: RunConfig, *, program: str | None = None) -> None:
+    """The results table of every baseline evaluated in this experiment directory, and its plot; the guard's line
+    under it judges the run's own program (``program``: the file prog and prog-retrained ran under, cfg.program by
+    default, "" for the searched one)."""
     rows = collect(Path(cfg.exp_dir), pipeline_command(cfg))
     console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95", caption=LEGEND))
-    line = communication_guard(rows, f"neurosym synth baseline=prog {run_args(cfg)}")
+    labels, per_seed = _guard_inputs(cfg, cfg.program if program is None else program)
+    line = communication_guard(rows, labels=labels, rerun=f"neurosym synth baseline=prog {run_args(cfg)}",
+                               per_seed=per_seed, settings={"synth.front": cfg.synth.front,
+                                                            "synth.search": cfg.synth.search,
+                                                            "synth.objective": cfg.synth.objective})
     if line:
         log.warning(line)
     if cfg.plots:

@@ -31,7 +31,7 @@ from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 from .jobs import quiet_job, run_jobs
-from .select import validate
+from .validation import validate
 
 
 def grid(cfg: RunConfig) -> list[RunConfig]:

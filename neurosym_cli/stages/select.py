@@ -19,7 +19,7 @@ import dataclasses
 import os
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from .. import __version__
 from ..schemes import get
@@ -27,45 +27,14 @@ from ..config import ConfigError, RunConfig, UserError
 from ..degrees import LEGEND
 from ..baselines import run_args
 from ..run import RunDir
+from ..schemes.searched import recorded_search
 from .reuse import SEARCH_KEYS, searched_otherwise
-from ..stats import mean_ci  # the project's one Student-t interval
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import read_json, write_csv, write_json
 from . import RunInfo
 from .jobs import quiet_job, run_jobs
-
-DEGREE = "max_degree"
-"""the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
-
-
-def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The paper's rule on validation rows. Each row has ``name``, ``loss`` (per validation seed, the same seeds in
-    the same order for every row) and ``degree`` (its mean over those seeds).
-
-    Returns the rows annotated, ordered by (not similar, degree, loss): ``loss_mean``, ``loss_ci``, ``diff`` (mean
-    paired difference to the validation-best), ``diff_ci`` (its 95 % half-width), ``similar`` (the interval
-    contains 0: the difference is not significant) and ``picked`` (the lowest degree among the similar rows, the
-    lower mean loss on a tie)."""
-    if not rows:
-        raise ValueError("nothing to choose from")
-    seeds = {len(r["loss"]) for r in rows}
-    if len(seeds) != 1:
-        raise ValueError(f"rows are evaluated on different numbers of seeds: {sorted(seeds)}")
-    out = [dict(r) for r in rows]
-    for r in out:
-        r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
-    best = min(out, key=lambda r: r["loss_mean"])
-    for r in out:
-        d = [a - b for a, b in zip(r["loss"], best["loss"])]
-        r["diff"], r["diff_ci"] = mean_ci(d)
-        r["similar"] = r is best or r["diff"] <= r["diff_ci"]
-        r["best"] = r is best
-        r["picked"] = False
-    out.sort(key=lambda r: (not r["similar"], r["degree"], r["loss_mean"]))
-    out[0]["picked"] = True
-    return out
-
+from .validation import choose, validate  # noqa: F401  (choose: the rule, read here by tests and benchmarks)
 
 # ------------------------------------------------------------------------------------------------- the grid
 LAM_GRIDS = {"paper": [0.3, 0.5, 0.7, 1.0], "hinge": [0.3, 0.5, 0.7, 1.0], "scaled": [0.1, 0.25, 0.5, 0.75]}
@@ -94,48 +63,6 @@ def grid(cfg: RunConfig) -> list[RunConfig]:
 def point_name(cfg: RunConfig) -> str:
     """A grid point's program tag (k5-lam0.5-v1 plus the search variant)."""
     return RunDir(cfg).program_tag
-
-
-def _val_file(cfg: RunConfig) -> Path:
-    return RunDir(cfg).val_file(RunDir(cfg).label)
-
-
-def validate(cfg: RunConfig) -> dict[str, Any]:
-    """Validation rows of ``cfg``'s baseline (prog, prog-retrained, rl): per validation seed the loss and the degree.
-    Reused when the file exists for the same program text, model and seeds."""
-    import torch
-
-    from ..evaluation import evaluate
-    from ..utils.device import resolve_device
-    from ..utils.seeding import seed_everything
-    from ..run.models import load_baseline
-
-    program = RunDir(cfg).program_file.read_text() if cfg.baseline.has_program else None
-    model = RunDir(cfg).model_file
-    stamp = {"program": program, "model": str(model), "model_mtime": model.stat().st_mtime,
-             "val_seeds": cfg.budget.val_seeds}
-    out = _val_file(cfg)
-    if out.exists():
-        try:
-            old = read_json(out)
-            if {k: old.get(k) for k in stamp} == stamp:
-                return old
-        except UserError:
-            pass  # unreadable: evaluate again
-    device = resolve_device(cfg.device)
-    seed_everything(cfg.seed)
-    policy, env, comm = load_baseline(cfg, device)
-    t0 = time.perf_counter()
-    with torch.no_grad():
-        rows = evaluate(env, policy, comm, list(range(cfg.budget.val_seeds)), device, cfg.task.detach_state,
-                        split="val")
-    result = {**stamp, "label": RunDir(cfg).label, "seconds": time.perf_counter() - t0,
-              "loss": [r["cost"] for r in rows], "degree_per_seed": [r[DEGREE] for r in rows],
-              "max_in": sum(r["max_in"] for r in rows) / len(rows),
-              "max_out": sum(r["max_out"] for r in rows) / len(rows),
-              "degree": sum(r[DEGREE] for r in rows) / len(rows)}
-    write_json(out, result)
-    return result
 
 
 def search_job(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
@@ -181,7 +108,7 @@ def apply_selected(cfg: RunConfig) -> RunConfig:
         raise UserError(f"selected=true, but no selection at {path}; make it with `{select_command(cfg)}`")
     rec = read_json(path, select_command(cfg), {"rules": int, "lam": (int, float), "features": str, "synth": dict})
     try:
-        synth = dataclasses.replace(cfg.synth, **rec["synth"])
+        synth = dataclasses.replace(cfg.synth, **recorded_search(rec["synth"]))  # absent: the search then
         return dataclasses.replace(cfg, rules=int(rec["rules"]), lam=float(rec["lam"]), features=str(rec["features"]),
                                    synth=synth, selected=False)
     except (KeyError, TypeError, ValueError) as e:
