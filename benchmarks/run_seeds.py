@@ -38,7 +38,7 @@ from pathlib import Path
 
 from neurosym_cli.run.layout import ORACLE_DIR, TRACE, RunFolder
 from neurosym_cli.schemes import SCHEMES
-from neurosym_cli.schemes.searched import Searched  # runs under a program or a tree
+from neurosym_cli.schemes.searched import Searched, program_tag, tag_prefixes  # Searched: under a program or tree
 from neurosym_cli.utils.cpu import PIN  # what the pinned modes set (the console script sets it in every job too)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -80,9 +80,9 @@ def collect(exp: Path, task: str, seed: int, budget: str, wall_s: float) -> dict
             continue  # rl1/rl2 and other renamed rows
         baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
                                     "seconds": m["seconds"]}
+    tag = program_tag(rules=pick["rules"], lam=pick["lam"], features=pick["features"], synth=selected["synth"])
     programs = {p.parent.name: p.read_text().strip() for p in run.programs()
-                if p.parent.name.endswith(f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}")
-                or f"k{pick['rules']}-lam{pick['lam']:g}-{pick['features']}-" in p.parent.name}
+                if p.parent.name in {prefix + tag for prefix in tag_prefixes()}}  # the pick's prog and det-prog
     timings = run.timings_file
     return {
         "task": task, "seed": seed, "budget": budget, "pick": pick, "selected": selected,

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from neurosym_cli.run.layout import ORACLE_DIR, RunFolder
+from neurosym_cli.schemes.searched import program_tag, tag_prefixes
 
 from .files import FIGURES, KEEP_SELECT, METRICS, RESULTS, TRAINING, VARIANTS, entry, has_program, write
 
@@ -18,6 +19,7 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
     for name, (task, lam, objective) in VARIANTS.items():
         exp = RunFolder(root / task / budget / f"seed{seed}")
         out: dict = {"task": task, "objective": objective, "baselines": {}, "programs": {}}
+        tags: set[str] = set()  # the programs evaluated here (their tags as schemes/searched.py names them)
         for f in exp.metrics_files():
             m = json.loads(f.read_text())
             c = m["config"]
@@ -26,14 +28,15 @@ def collect(root: Path, budget: str = "paper", seed: int = 0) -> None:
                         or not c["synth"].get("own_scores", True) or c.get("program")):
                     continue  # another variant's programs, or a hand-written one
                 out["lam"], out["rules"], out["features"] = c["lam"], c["rules"], c["features"]
+                tags.add(program_tag(rules=c["rules"], lam=c["lam"], features=c["features"], synth=c["synth"]))
             out["baselines"][m["baseline"]] = entry(m)
             out["seeds"] = m["seeds"]
         if "lam" not in out:
             print(f"no program evaluations for {name} under {exp.root}; skipped", file=sys.stderr)
             continue
-        suffix = f"-lam{out['lam']:g}-{out['features']}" + ("" if objective == "paper" else f"-{objective}")
+        named = {prefix + tag for prefix in tag_prefixes() for tag in tags}  # prog's and det-prog's
         for p in exp.programs():
-            if p.parent.name.endswith(suffix):
+            if p.parent.name in named:
                 out["programs"][p.parent.name] = p.read_text().strip()
         timing = exp.timings_file
         if name == task and timing.exists():

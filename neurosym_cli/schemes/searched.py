@@ -9,7 +9,7 @@ import re
 import shlex
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 from ..baselines import ORACLE, Artifact, Stage, runs_root_arg
 from ..errors import ConfigError
@@ -38,30 +38,88 @@ def user_program_tag(cfg: "RunConfig") -> str | None:
     return f"file-{stem}-{digest}-{cfg.features}"
 
 
+@dataclass(frozen=True)
+class SearchVariant:
+    """One synth setting that names a program when it differs from ``default``: its suffix on the program's tag and
+    its override on the command line that searches it again."""
+
+    key: str
+    """the field of SynthConfig (``synth.<key>``)"""
+    default: Any
+    """the value that adds no suffix; also what a record written before the setting existed searched with"""
+    suffix: Callable[[Any], str]
+    """the value -> its part of the tag ("-hinge", "-coarse4")"""
+    named: Callable[[Any], bool] | None = None
+    """whether a value names the program (default: it differs from ``default``)"""
+
+    def names(self, value: Any) -> bool:
+        return self.named(value) if self.named else value != self.default
+
+
+SEARCH_VARIANTS = (
+    SearchVariant("objective", "paper", lambda v: f"-{v}"),
+    SearchVariant("own_scores", True, lambda v: "-otherscores"),
+    SearchVariant("simplify", True, lambda v: "-unsimplified"),
+    SearchVariant("coarse", 1, lambda v: f"-coarse{v}", lambda v: v > 1),
+    SearchVariant("patience", 0, lambda v: f"-patience{v}", bool),
+    SearchVariant("search", "mcmc", lambda v: f"-{v}"),
+)
+"""every search setting that names a program, in the order of its tag's suffixes (one place: the tag, the
+selection's record, the reuse of a sweep's programs and the result collectors all read it)"""
+
+SEARCH_KEYS = tuple(v.key for v in SEARCH_VARIANTS)
+"""the synth settings that name a program and that select/selected.json records"""
+
+
+def override(key: str, value: Any) -> str:
+    """A search setting on the command line: 'synth.own_scores=false'."""
+    return f"synth.{key}={str(value).lower() if isinstance(value, bool) else value}"
+
+
+def recorded_search(synth: Mapping[str, Any]) -> dict[str, Any]:
+    """The search settings of a record's synth dict, by SEARCH_KEYS; a key the record lacks (written before the
+    setting existed) reads as its default, the search the code made then."""
+    return {v.key: synth.get(v.key, v.default) for v in SEARCH_VARIANTS}
+
+
+def variants_of(synth: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """(name suffix, override) for each setting of ``synth`` (a SynthConfig's fields by name, or a record's synth
+    dict, see ``recorded_search``) that names the program."""
+    found = recorded_search(synth)
+    return [(v.suffix(found[v.key]), " " + override(v.key, found[v.key]))
+            for v in SEARCH_VARIANTS if v.names(found[v.key])]
+
+
 def search_variants(cfg: "RunConfig") -> list[tuple[str, str]]:
     """(name suffix, override) for each way a program's search differs from the default: the reference's hinge
     objective, scores kept to the other agent's features, ..."""
-    out = []
-    if cfg.synth.objective != "paper":
-        out.append((f"-{cfg.synth.objective}", f" synth.objective={cfg.synth.objective}"))
-    if not cfg.synth.own_scores:
-        out.append(("-otherscores", " synth.own_scores=false"))
-    if not cfg.synth.simplify:
-        out.append(("-unsimplified", " synth.simplify=false"))
-    if cfg.synth.coarse > 1:
-        out.append((f"-coarse{cfg.synth.coarse}", f" synth.coarse={cfg.synth.coarse}"))
-    if cfg.synth.patience:
-        out.append((f"-patience{cfg.synth.patience}", f" synth.patience={cfg.synth.patience}"))
-    if cfg.synth.search != "mcmc":
-        out.append((f"-{cfg.synth.search}", f" synth.search={cfg.synth.search}"))
-    return out
+    return variants_of({v.key: getattr(cfg.synth, v.key) for v in SEARCH_VARIANTS})
+
+
+def point_tag(*, rules: int, lam: float, features: str) -> str:
+    """The grid point's part of a program's tag (K, lambda, feature map): 'k2-lam0.5-v1'."""
+    return f"k{rules}-lam{lam:g}-{features}"
+
+
+def program_tag(*, rules: int, lam: float, features: str, synth: Mapping[str, Any]) -> str:
+    """The tag of the program searched at a grid point with the settings ``synth`` (a record's synth dict; keys it
+    lacks read as their defaults): 'k2-lam0.5-v1-hinge-hybrid'."""
+    return point_tag(rules=rules, lam=lam, features=features) + "".join(s for s, _ in variants_of(synth))
 
 
 def search_tag(cfg: "RunConfig") -> str:
     """K, lambda, feature map and search variant of a synthesized program (or a hand-written program's tag)."""
     if cfg.program:
         return user_program_tag(cfg)  # type: ignore[return-value]
-    return f"k{cfg.rules}-lam{cfg.lam:g}-{cfg.features}" + "".join(suffix for suffix, _ in search_variants(cfg))
+    return point_tag(rules=cfg.rules, lam=cfg.lam, features=cfg.features) \
+        + "".join(suffix for suffix, _ in search_variants(cfg))
+
+
+def tag_prefixes() -> set[str]:
+    """What the artifact tags of the program-running schemes start with ('' for prog, 'det-' for det-prog)."""
+    from . import SCHEMES
+
+    return {s.tag_prefix() for s in SCHEMES.values() if isinstance(s, Program)}
 
 
 def _given(artifact: Path | None, scheme: "Searched") -> Path:

@@ -7,10 +7,10 @@ from __future__ import annotations
 from ..baselines import run_args
 from ..config import RunConfig, UserError
 from ..run import RunDir
+from ..schemes.searched import SEARCH_KEYS, override, point_tag, recorded_search
 from ..utils.io import read_json
 
-SEARCH_KEYS = ("objective", "own_scores", "simplify", "coarse", "patience")
-"""the synth settings that name a program (schemes/searched.py ``search_variants``) and that selected.json records"""
+__all__ = ["SEARCH_KEYS", "searched_otherwise"]
 
 
 def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
@@ -24,15 +24,15 @@ def searched_otherwise(cfg: RunConfig, points: list[RunConfig]) -> str | None:
     for p in points:
         if RunDir(p).synthesized_file.exists():
             continue
-        stem = f"k{p.rules}-lam{p.lam:g}-{p.features}"
+        stem = point_tag(rules=p.rules, lam=p.lam, features=p.features)
         for d in RunDir(cfg).summaries(stem):
             if d.parent.name != stem and not d.parent.name.startswith(stem + "-"):
                 continue  # k1-lam0.5-v1 is not k1-lam0.5-v10
             try:
                 synth = read_json(d)["config"]["synth"]
-                key = " ".join(f"synth.{k}={str(synth[k]).lower() if isinstance(synth[k], bool) else synth[k]}"
-                               for k in SEARCH_KEYS if synth[k] != getattr(cfg.synth, k))
-            except (UserError, KeyError, TypeError):
+                key = " ".join(override(k, x) for k, x in recorded_search(synth).items()
+                               if x != getattr(cfg.synth, k))
+            except (UserError, KeyError, TypeError, AttributeError):
                 continue  # not a summary of this version: nothing to offer
             found.setdefault(key, []).append(d.parent.name)
             break
