@@ -223,6 +223,40 @@ def test_show_program_needs_no_torch_and_reports_bad_text(tmp_path):
     assert "ask the nearest agent whose bearing (rad) is at least -1.85" in p.stdout
 
 
+def _no_torch(args, tmp_path):
+    """The console's main on ``args`` in a subprocess (runs root tmp_path) that fails when torch was imported."""
+    code = (f"import sys; sys.argv=['neurosym', *{list(args)!r}];"
+            "from neurosym_cli.cli import main\ntry:\n main()\nexcept SystemExit as e:\n code = e.code\n"
+            "else:\n code = 0\nassert 'torch' not in sys.modules, 'torch imported'\nsys.exit(code)")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+                          env={**os.environ, "NEUROSYM_RUNS": str(tmp_path)}, timeout=120)
+
+
+def test_report_needs_no_torch(tmp_path):
+    from test_hardening_seeds import _metrics
+
+    root = tmp_path / "random-grid" / "tiny"
+    for s in range(2):
+        _metrics(root / f"seed{s}" / "eval" / "tf-full", s)
+        _metrics(root / f"seed{s}" / "eval" / "no-comm", s, label="no-comm")
+    p = _no_torch(["report", "task=random-grid", "budget=tiny", "report.reps=200", "plots=false"], tmp_path)
+    assert p.returncode == 0 and "torch imported" not in p.stderr, p.stderr
+    assert "tf-full" in p.stdout and (root / "report.json").is_file()
+
+
+def test_show_program_of_a_run_with_a_front_needs_no_torch(tmp_path):
+    synth = tmp_path / "random-grid" / "tiny" / "seed0" / "synth" / "k2-lam0.5-v1"
+    synth.mkdir(parents=True)
+    silent, near = "random(filter(false, l))", "argmax(map(-1.0*d, filter(true, l)))"
+    (synth / "program.txt").write_text(f"{near}\n{near}\n")
+    rows = [{"budget": b, "l1": l1, "l1_ratio": l1 / 2.0, "degree": b, "max_in": b / 2, "max_out": b / 2,
+             "program": p} for b, l1, p in ((0.0, 2.0, silent), (2.0, 0.5, near))]
+    (synth / "front.json").write_text(json.dumps({"rounds": [{"round": r, "budgets": rows} for r in (1, 2)]}))
+    p = _no_torch(["show-program", "task=random-grid", "budget=tiny"], tmp_path)
+    assert p.returncode == 0 and "torch imported" not in p.stderr, p.stderr
+    assert "degree-budget front" in p.stdout and "Traceback" not in p.stderr
+
+
 def test_synth_before_train_names_the_command(tmp_path):
     p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path, check=False)
     assert p.returncode != 0

@@ -10,10 +10,9 @@ from .. import schemes
 from ..config import RunConfig
 from ..baselines import run_args
 from ..degrees import LEGEND, NAMES
-from ..plotting import figure2, pareto_plot, training_curves
-from ..rollout import METRICS
 from ..run import RunDir, pipeline_command
 from ..run.layout import FIGURES, history_files, metrics_files
+from ..seeds.read import SHARED as METRICS  # every evaluation's metrics, named without torch
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -95,6 +94,8 @@ def histories(root: Path) -> list[tuple[str, str, bool, list[list[tuple[float, f
 
 def write_curves(root: Path, head: str, path: Path) -> Path | None:
     """Training curves of every model under ``root`` as a PNG (None when nothing was trained there)."""
+    from ..plotting import training_curves  # matplotlib only where a figure is drawn
+
     runs = histories(root)
     return training_curves(runs, head, path) if runs else None
 
@@ -102,6 +103,7 @@ def write_curves(root: Path, head: str, path: Path) -> Path | None:
 def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[Path, Path | None]:
     """pareto.csv and pareto.png: loss against max degree of every row, the non-dominated set, and the area it
     dominates up to the reference point (1.05 x the largest degree and the largest loss found here)."""
+    from ..plotting import pareto_plot
     from ..utils.pareto import dominated_area, pareto_front
 
     pts = [(label, s["max_degree"]["mean"], s["cost"]["mean"]) for label, s in rows]
@@ -131,6 +133,8 @@ def title(cfg: RunConfig) -> str:
 def write_figure(cfg: RunConfig) -> Path:
     """Figure-2-style PNG of every baseline evaluated in this experiment directory (and the training curves of
     its models beside it, curves.png)."""
+    from ..plotting import figure2
+
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
                  "training curves", RunDir(cfg).eval_root / "curves.png")
     return figure2(collect(Path(cfg.exp_dir), pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
@@ -249,6 +253,7 @@ def report(cfg: RunConfig) -> dict:
     the others; tables on screen, CSV, JSON and marl-eval JSON beside them (figures with plots=true). Reads only;
     writes only its report files."""
     from .. import seeds
+    from ..plotting import figure2
 
     rc = cfg.report
     if rc.seed_files:
