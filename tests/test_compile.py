@@ -10,6 +10,7 @@ from neurosym_cli.config import ConfigError, ModelConfig, RunConfig
 from neurosym_cli.policy import CommTransformer
 from neurosym_cli.policy.comm import CommBase, FullComm, NearestComm
 from neurosym_cli.rollout import rollout
+from neurosym_cli.run.checkpoints import refuse_other_modes
 from neurosym_cli.tasks import make_task
 from neurosym_cli.tasks.base import Rng
 from neurosym_cli.tasks.random_cross import CrossConfig
@@ -22,6 +23,9 @@ TASKS = {"random-cross": lambda: CrossConfig(name="random-cross"),
          "two-groups-cross": lambda: CrossConfig(name="two-groups-cross", num_groups=2),
          "random-grid": lambda: GridConfig(name="random-grid"),
          "unlabeled-goals": lambda: UnlabeledConfig(name="unlabeled-goals")}
+
+CPU_CFG = RunConfig(cmd="train", exp_dir="outputs/x", cpu_kernels="avx2")
+"""a run under cpu_kernels=avx2 (the resume refusals compare a checkpoint with it)"""
 
 
 @pytest.fixture(autouse=True)
@@ -130,18 +134,29 @@ def test_resume_under_another_compile_mode_is_refused(was, now, monkeypatch):
     monkeypatch.setattr(compiling, "compiler", lambda: "g++")
     compiling.configure(now)
     payload = {"runtime": {"compile": {"asked": was, "in_effect": was}}}
-    with pytest.raises(ConfigError, match=f"compiled {was}.*this run has it {now}.*resume it with compile={was}"):
-        compiling.refuse_other_compile(payload, "model.pt", 7)
-    compiling.refuse_other_compile({"runtime": {"compile": {"asked": now, "in_effect": now}}}, "model.pt", 7)
+    with pytest.raises(ConfigError, match=f"7 steps under compile={was}, this run has compile={now}: resume it with "
+                                          f"compile={was}"):
+        refuse_other_modes(payload, "model.pt", steps=7, cfg=CPU_CFG)
+    refuse_other_modes({"runtime": {"compile": {"asked": now, "in_effect": now}}}, "model.pt", steps=7, cfg=CPU_CFG)
+
+
+def test_both_resume_refusals_have_one_shape():
+    """cpu_kernels (read from the checkpoint's config) and compile (its runtime) are refused by one table."""
+    compiling.configure("off")
+    payload = {"config": {"cpu_kernels": "native"}, "runtime": {"compile": {"asked": "off", "in_effect": "off"}}}
+    with pytest.raises(ConfigError, match="3 steps under cpu_kernels=native, this run has cpu_kernels=avx2: resume "
+                                          "it with cpu_kernels=native, or pass overwrite=true"):
+        refuse_other_modes(payload, "model.pt", steps=3, cfg=CPU_CFG)
+    refuse_other_modes({"config": {"cpu_kernels": "avx2"}}, "model.pt", steps=3, cfg=CPU_CFG)
 
 
 def test_a_checkpoint_from_before_the_key_resumes_eager_only(monkeypatch):
     compiling.configure("off")
-    compiling.refuse_other_compile({"runtime": {"cpu_kernels": "avx2"}}, "model.pt", 3)  # no record: eager
+    refuse_other_modes({"runtime": {"cpu_kernels": "avx2"}}, "model.pt", steps=3, cfg=CPU_CFG)  # no record: eager
     monkeypatch.setattr(compiling, "compiler", lambda: "g++")
     compiling.configure("on")
     with pytest.raises(ConfigError, match="compile=off"):
-        compiling.refuse_other_compile({}, "model.pt", 3)
+        refuse_other_modes({}, "model.pt", steps=3, cfg=CPU_CFG)
 
 
 def test_nearest_provider_records_its_plan_without_compiling(monkeypatch):

@@ -5,9 +5,9 @@ oracle's or a baseline's own checkpoint of a run directory in one call, naming t
 from __future__ import annotations
 
 import io
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import torch
 
@@ -23,6 +23,53 @@ if TYPE_CHECKING:
     from ..config import RunConfig
 
 CHECKPOINT_FORMAT = "neurosym-policy/1"
+
+
+# ------------------------------------------------------------------------------------------ resume modes
+def _at(payload: dict[str, Any], *keys: str) -> Any:
+    """payload[k1][k2]..., None where a level is missing or not a dict (a checkpoint from before the key)."""
+    for k in keys:
+        payload = payload.get(k) if isinstance(payload, dict) else None
+    return payload
+
+
+def _compiled_now(cfg: "RunConfig") -> str:
+    from ..utils.compiling import enabled
+
+    return "on" if enabled() else "off"  # in effect: compile=auto is off on a CPU, on where it compiles
+
+
+@dataclass(frozen=True)
+class ResumeMode:
+    """A setting a checkpoint resumes under only as it was trained: steps under two values would be a run neither
+    makes (other kernels, or a compiled step, round differently), recorded as the last value only."""
+
+    key: str
+    """the setting's name on the command line"""
+    recorded: Callable[[dict[str, Any]], Any]
+    """its value in a checkpoint's payload; None: not recorded (a checkpoint from before the key), any value resumes"""
+    current: Callable[["RunConfig"], Any]
+    """its value in this run"""
+
+
+RESUME_MODES = (
+    ResumeMode("cpu_kernels", lambda p: _at(p, "config", "cpu_kernels"), lambda cfg: cfg.cpu_kernels),
+    # the step as it ran (in effect), not as asked; a checkpoint from before the key ran eager
+    ResumeMode("compile", lambda p: _at(p, "runtime", "compile", "in_effect") or "off", _compiled_now),
+)
+"""every setting a resume must keep"""
+
+
+def refuse_other_modes(payload: dict[str, Any], ckpt: object, *, steps: int, cfg: "RunConfig") -> None:
+    """One line (ConfigError) when ``cfg`` differs from the checkpoint in a setting of RESUME_MODES."""
+    from ..errors import ConfigError
+
+    for mode in RESUME_MODES:
+        was, now = mode.recorded(payload), mode.current(cfg)
+        if was is not None and was != now:
+            raise ConfigError(f"{ckpt} was trained for {steps} steps under {mode.key}={was}, this run has "
+                              f"{mode.key}={now}: resume it with {mode.key}={was}, or pass overwrite=true to train "
+                              "it from the start under this one")
 
 
 def checkpoint_bytes(payload: dict[str, Any]) -> bytes:

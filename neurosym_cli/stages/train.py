@@ -19,12 +19,12 @@ from ..tasks import make_task, probe
 from ..policy import CommTransformer
 from ..policy.comm import CommProvider, comm_module
 from ..run import RunDir, train_command
-from ..run.checkpoints import checkpoint_bytes, load_checkpoint, open_checkpoint, policy_from_payload, policy_payload
+from ..run.checkpoints import (checkpoint_bytes, load_checkpoint, open_checkpoint, policy_from_payload, policy_payload,
+                               refuse_other_modes)
 from ..run.commands import missing_chain
 from ..run.models import baseline_comm, check_memory, comm_identity, load_gate
 from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
-from ..utils.compiling import refuse_other_compile
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
@@ -43,11 +43,16 @@ class Tracked:
         self.tracker.log(step, {f"train/{k}": v for k, v in metrics.items() if k != "step"})
 
 
+SEARCH_ONLY = frozenset({"lam", "objective"})
+"""task fields that set the program search's defaults, not what a model is trained on (a model trained before a
+task stated its objective records none, which reads as the schema's default)"""
+
+
 def check_compatible(saved: dict, cfg: RunConfig, path) -> None:
     """A checkpoint is resumed or extended only under the same task, model and optimiser config, compared section
     by section against the typed config (``RunConfig.first_difference``). The message names the first differing
     key."""
-    diff = cfg.first_difference(saved, ("task", "model", "optim"))
+    diff = cfg.first_difference(saved, ("task", "model", "optim"), SEARCH_ONLY)
     if diff:
         key, old, new = diff
         raise ConfigError(f"{path} was trained with {key}={old!r}, this run has {new!r}; pass overwrite=true to start "
@@ -175,12 +180,7 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, *, ini
             if not run.manifest_file.exists():  # the run ended before its manifest (a full disk): made now
                 _manifest(cfg, info, out, verb=verb, spec=spec, state=state, seconds=0.0, rollouts=0, device=device)
             return {"checkpoint": str(ckpt), "steps": state.step}
-        kernels = payload["config"].get("cpu_kernels")
-        if kernels is not None and kernels != cfg.cpu_kernels:  # steps of two kernel sets: a run neither would make
-            raise ConfigError(f"{ckpt} was trained for {state.step} steps under cpu_kernels={kernels}, this run has "
-                              f"cpu_kernels={cfg.cpu_kernels}: resume it with cpu_kernels={kernels}, or pass "
-                              "overwrite=true to train it from the start under this one")
-        refuse_other_compile(payload, ckpt, state.step)
+        refuse_other_modes(payload, ckpt, steps=state.step, cfg=cfg)
         log.info("resuming %s from step %d/%d (%d rollouts done)", ckpt, state.step, spec.steps,
                  state.step * spec.batch)
     else:

@@ -88,19 +88,3 @@ def record() -> dict[str, object]:
     """The compile mode as recorded in every artifact's runtime: asked, in effect, why not, and the compile cost."""
     return {"asked": _state["asked"], "in_effect": "on" if _state["on"] else "off", "why_off": _state["why"],
             "compile_seconds": round(float(_state["seconds"]), 3), "shapes_compiled": _state["shapes"]}  # type: ignore[arg-type]
-
-
-def refuse_other_compile(payload: dict, ckpt: object, steps: int) -> None:
-    """A checkpoint trained with the step compiled (or eager) resumes only so: steps of both would be a run
-    neither makes (the compiled step rounds differently). Checkpoints from before the key ran eager."""
-    from ..errors import ConfigError
-
-    runtime = payload.get("runtime") if isinstance(payload.get("runtime"), dict) else {}
-    rec = runtime.get("compile") if isinstance(runtime.get("compile"), dict) else {}
-    was = rec.get("in_effect", "off")
-    now = "on" if enabled() else "off"
-    if was != now:
-        raise ConfigError(f"{ckpt} was trained for {steps} steps with the step compiled {was} (compile="
-                          f"{rec.get('asked', 'off')}), this run has it {now} (compile={_state['asked']}): resume it "
-                          f"with compile={'on' if was == 'on' else 'off'}, or pass overwrite=true to train it from "
-                          "the start under this one")
