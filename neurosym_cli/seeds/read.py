@@ -33,6 +33,47 @@ IGNORED = ("cmd", "seed", "exp_dir", "runs_root", "report_dir", "report", "devic
 PICKED = ("rules", "lam", "features", "synth")
 """what `neurosym select` chooses per training seed (K, lambda, features, search settings): allowed to differ"""
 
+ADDED = ("synth.search", "synth.front", "synth.front_budgets", "synth.front_steps", "pipeline.select")
+"""config keys added to the schema on 2026-12-03: a record written before lacks them, and its run is what their
+schema default does (MCMC, no front, the single-lam program), so it reads as that default"""
+
+BEFORE = {"task.objective": "paper", "compile": "off"}
+"""config keys added with another default than what the code did before them: what a record without them ran
+(every task's objective was the paper's before task.objective, a task that states none now composes scaled; the
+step was eager before compile=)"""
+
+
+def schema_default(key: str) -> Any:
+    """The default of a dotted config key in RunConfig's schema ("synth.search" -> "mcmc")."""
+    import dataclasses
+
+    from ..config import RunConfig
+
+    obj: Any = RunConfig
+    for part in key.split("."):
+        f = next(f for f in dataclasses.fields(obj) if f.name == part)
+        obj = f.default_factory() if f.default is dataclasses.MISSING else f.default  # type: ignore[misc]
+    return obj
+
+
+def as_run(key: str, settings: dict[str, Any]) -> Any:
+    """A record's setting ``key`` (of its flattened ``settings``) as what its run did, so that seeds of older and
+    newer code that made the same run compare equal: a key the record predates reads as what the code did then
+    (``ADDED``, ``BEFORE``; other absent keys '<absent>'); compile as the step in effect (auto: eager, as off); an
+    empty select.lam as the grid it stands for (stages/select.LAM_GRIDS of the record's objective)."""
+    if key not in settings:
+        return schema_default(key) if key in ADDED else BEFORE.get(key, "<absent>")
+    value = settings[key]
+    if key == "compile" and isinstance(value, str):
+        from ..utils.compiling import resolve
+
+        return "on" if resolve(value) else "off"
+    if key == "select.lam" and value == []:
+        from ..stages.select import LAM_GRIDS
+
+        return LAM_GRIDS.get(settings.get("synth.objective", "paper"), value)
+    return value
+
 
 @dataclass
 class Entry:
@@ -253,7 +294,7 @@ def check_same(runs: Sequence[SeedRun], mix: bool = False) -> list[str]:
     def compare(what: str, dicts: list[tuple[int, dict]]) -> None:
         keys = sorted({k for _, d in dicts for k in d}, key=lambda k: (k != "picked by select", k))
         for k in keys:
-            vals = [(s, d.get(k, "<absent>")) for s, d in dicts]
+            vals = [(s, as_run(k, d)) for s, d in dicts]
             if len({json.dumps(v, sort_keys=True, default=str) for _, v in vals}) > 1:
                 (s0, v0), (s1, v1) = vals[0], next((s, v) for s, v in vals if v != vals[0][1])
                 line = (f"{what}{k} differs across training seeds (seed {s0}: {_show(v0)}, seed {s1}: {_show(v1)})")
