@@ -39,6 +39,7 @@ from pathlib import Path
 from neurosym_cli.run.layout import ORACLE_DIR, TRACE, RunFolder
 from neurosym_cli.schemes import SCHEMES
 from neurosym_cli.schemes.searched import Searched, program_tag, tag_prefixes  # Searched: under a program or tree
+from neurosym_cli.utils.io import write_json
 from neurosym_cli.utils.cpu import PIN  # what the pinned modes set (the console script sets it in every job too)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -244,9 +245,9 @@ def main() -> None:
 
 
 def write_result(dest: Path, res: dict) -> None:
-    tmp = dest.with_suffix(".tmp")
-    tmp.write_text(json.dumps(res, indent=1, sort_keys=True) + "\n")
-    tmp.replace(dest)
+    """A result file (here and docs/results/, benchmarks/results/files.py), atomically, with a temp file of its own
+    (concurrent writers never share one); sorted keys and a one-space indent keep its diffs in git small."""
+    write_json(dest, res, indent=1, sort_keys=True)
 
 
 def recollect(out: Path, runs: Path, task: str, seed: int, args) -> None:

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from benchmarks.run_seeds import KEEP_SELECT, SEEDS as PLANNED_SEEDS, TASKS as SEED_TASKS  # noqa: F401  (one place)
+from benchmarks.run_seeds import write_result as write  # noqa: F401  (a result file, atomically)
 from neurosym_cli.schemes import SCHEMES, default_baselines
 from neurosym_cli.seeds.read import METRICS  # noqa: F401  (the metrics a result file keeps per baseline)
 
@@ -47,13 +48,6 @@ def entry(m: dict, *, metrics=METRICS, stats=("mean", "std"), optional=False, **
     return {"label": m["label"], **extra,
             "summary": {k: {x: m["summary"][k][x] for x in stats} for k in keys},
             "cost_per_seed": {str(r["seed"]): r["cost"] for r in m["per_seed"]}}
-
-
-def write(path: Path, data: dict) -> None:
-    """A result file, atomically (sorted keys, one-space indent: small diffs in git)."""
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    tmp.replace(path)
 
 
 def read(name: str) -> dict:

@@ -94,8 +94,8 @@ def write_together(files: Mapping[Path, bytes]) -> None:
             tmp.write_bytes(files[path])
 
 
-def json_bytes(obj: Any) -> bytes:
-    return (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode()
+def json_bytes(obj: Any, *, indent: int = 2, sort_keys: bool = False) -> bytes:
+    return (json.dumps(obj, indent=indent, sort_keys=sort_keys) + "\n").encode()
 
 
 def csv_bytes(rows: Sequence[Mapping[str, Any]]) -> bytes:
@@ -111,8 +111,10 @@ def write_text(path: Path, text: str) -> None:
     atomic_write_bytes(path, text.encode())
 
 
-def write_json(path: Path, obj: Any) -> None:
-    atomic_write_bytes(path, json_bytes(obj))
+def write_json(path: Path, obj: Any, *, indent: int = 2, sort_keys: bool = False) -> None:
+    """``obj`` as JSON at ``path``, atomically (a temp file of its own beside it: concurrent writers never share
+    one); ``indent`` and ``sort_keys`` as json.dumps takes them."""
+    atomic_write_bytes(path, json_bytes(obj, indent=indent, sort_keys=sort_keys))
 
 
 def write_csv(path: Path, rows: Sequence[Mapping[str, Any]]) -> None:
