@@ -74,7 +74,7 @@ def comm_identity(cfg: RunConfig, comm: CommProvider) -> str:
     return cfg.baseline.artifact_identity(cfg, comm, artifact=RunDir(cfg).artifact_file())  # type: ignore[attr-defined]
 
 
-PROTOCOL_KEYS = frozenset({"eval_episodes", "test_settings", "rules", "lam"})
+PROTOCOL_KEYS = frozenset({"eval_episodes", "test_settings", "rules", "lam", "objective"})
 """task fields that choose the evaluation protocol or the search's defaults, not the condition a model acts in"""
 
 
