@@ -16,7 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-from neurosym_cli.run.layout import METRICS, MODEL, PROGRAM, TREE
+from neurosym_cli.run.layout import METRICS_FILE, MODEL, PROGRAM, TREE
 
 
 def tensors_digest(obj) -> str:
@@ -57,7 +57,7 @@ def fingerprint(root: Path) -> dict[str, str]:
             out[rel] = f.read_text()
         elif f.name == TREE:
             out[rel] = json.dumps(json.loads(f.read_text()).get("rounds"), sort_keys=True)
-        elif f.name == METRICS:
+        elif f.name == METRICS_FILE:
             out[rel] = json.dumps(json.loads(f.read_text())["per_seed"], sort_keys=True)
     return out
 

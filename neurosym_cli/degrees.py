@@ -18,6 +18,10 @@ from dataclasses import dataclass
 
 from .errors import UserError
 
+METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
+"""the metrics of every task and baseline, in every evaluation (rollout.py computes them; a task adds its own,
+``Task.metrics``)"""
+
 NAMES = {"max_in": "max in", "max_out": "max out", "max_degree": "max in+out", "mean_degree": "mean in+out"}
 """metric key -> its word (table headers, log lines, axis labels)"""
 

@@ -10,6 +10,7 @@ from torch import Tensor
 from .tasks.base import TaskState, Task, Rng
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer, Heard
+from .degrees import METRICS
 from .step import Recorder, step
 
 
@@ -34,8 +35,6 @@ class Trajectory:
         return out
 
 
-METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
-"""the metrics of every task and baseline; a task adds its own (``Task.metrics``)"""
 
 
 def degree_stats(masks: list) -> tuple[Tensor, Tensor, Tensor, Tensor]:

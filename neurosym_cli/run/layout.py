@@ -49,7 +49,7 @@ SUMMARY, TRACE = "summary.json", "trace.csv"
 """a search's record beside its program or tree, and its objective per step (synth/<tag>/)"""
 FRONT = "front.json"
 """a search's degree-budget front (synth/<tag>/, synth.front=true; front.csv beside it)"""
-METRICS, METRICS_CSV = "metrics.json", "metrics.csv"
+METRICS_FILE, METRICS_CSV = "metrics.json", "metrics.csv"
 """an evaluation's summary and its per-seed rows (eval/<label>/)"""
 SELECTED, SELECTION, VAL = "selected.json", "selection", "val"
 """select/: the choice, the whole selection (.json, .csv), and the validation rows per label (val/<label>.json)"""
@@ -112,11 +112,11 @@ class _Folder:
 
     def metrics_of(self, label: str) -> Path:
         """eval/<label>/metrics.json, one baseline's evaluation."""
-        return self.eval_root / label / METRICS
+        return self.eval_root / label / METRICS_FILE
 
     def metrics_files(self, labels: str = "*") -> list[Path]:
         """metrics.json of every baseline evaluated here whose label matches the glob ``labels``, sorted."""
-        return sorted(self.eval_root.glob(f"{labels}/{METRICS}"))
+        return sorted(self.eval_root.glob(f"{labels}/{METRICS_FILE}"))
 
     # ------------------------------------------------------------------------------------------ select, rl, stress
     @property

@@ -10,12 +10,11 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from .. import stats
+from ..degrees import METRICS as SHARED  # the metrics every evaluation has
 from ..errors import ConfigError
 from ..run.layout import RunFolder, is_front_pick
 from ..utils.io import ArtifactError
 
-SHARED = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
-"""the metrics every evaluation has (rollout.METRICS, named here so that reading results needs no torch)"""
 METRICS = SHARED + ("collisions",)
 """what the tables report: the shared metrics, then the paper tasks' own (a task without it reports without it)"""
 

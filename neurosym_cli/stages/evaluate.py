@@ -17,7 +17,7 @@ from ..utils.lock import run_lock
 from ..utils.seeding import seed_everything
 from . import RunInfo
 from ..run import RunDir, train_command
-from ..run.layout import METRICS, METRICS_CSV
+from ..run.layout import METRICS_CSV, METRICS_FILE
 from ..run.models import load_baseline
 
 
@@ -49,7 +49,7 @@ def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -
 
 def _write(cfg: RunConfig, info: RunInfo, out, *, label: str, rows: list[dict], summary: dict, seconds: float,
            rules: int) -> None:
-    write_together({out / METRICS_CSV: csv_bytes(rows), out / METRICS: json_bytes({
+    write_together({out / METRICS_CSV: csv_bytes(rows), out / METRICS_FILE: json_bytes({
         "baseline": cfg.baseline.name, "label": label, "task": cfg.task.name, "rules": rules,
         "seeds": len(rows), "episodes_per_seed": rows[0]["episodes"], "summary": summary, "per_seed": rows,
         "model": str(RunDir(cfg).model_file), "seconds": seconds, "version": __version__,

@@ -13,13 +13,12 @@ from ..schemes import with_run
 from ..config import ConfigError, RunConfig, UserError
 from ..run import RunDir
 from ..policy.footprint import DoesNotFit
-from ..degrees import LEGEND
+from ..degrees import LEGEND, METRICS
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
 from . import RunInfo
 
-METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
 
 
 def conditions(cfg: RunConfig) -> list[tuple[str, int, float]]:
