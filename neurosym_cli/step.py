@@ -132,16 +132,36 @@ class CompiledSteps:
     kernels; dropout keeps eager's random stream (inductor's fallback_random). The batch axis is dynamic, the
     agent count static (few values: one compile each)."""
 
+    ATTR = "_neurosym_compiled_steps"
+    """the provider's attribute holding its compiled steps: they live and die with it (a process-wide table keyed
+    by id() kept every provider, policy and task alive, each compiled step closing over them: a leak under select
+    with compile=on)"""
+
     def __init__(self) -> None:
-        self.shapes: dict[tuple, _Shape] = {}
+        self.generation = 0  # reset_compiled bumps it: every provider's table is stale then
+        self.fallback: dict[int, dict[tuple, _Shape]] = {}  # providers that take no attribute (__slots__)
+        self.said_time_step = False  # the eager note on time-step readers, once per process
+
+    def shapes_of(self, comm: CommProvider) -> dict[tuple, _Shape]:
+        """The compiled steps of one provider, per (task, policy, agents, ...) key; ids in the key are safe: its
+        compiled steps hold that task and policy, so no other object takes their id while the entry lives."""
+        held = getattr(comm, self.ATTR, None)
+        if held is not None and held[0] == self.generation:
+            return held[1]
+        table: dict[tuple, _Shape] = {}
+        try:
+            object.__setattr__(comm, self.ATTR, (self.generation, table))  # nn.Module and frozen dataclasses too
+        except (AttributeError, TypeError):
+            table = self.fallback.setdefault(id(comm), table)  # __slots__: kept for the process, as before
+        return table
 
     def step(self, env: Task, policy: CommTransformer, comm: CommProvider, state: TaskState, rng: Rng, t: int
              ) -> Step:
         import torch
 
-        key = (id(env), id(policy), id(comm), type(state), state.n_agents, state.pos.device, policy.training,
+        key = (id(env), id(policy), type(state), state.n_agents, state.pos.device, policy.training,
                torch.is_grad_enabled(), state.pos.requires_grad)
-        shape = self.shapes.get(key)
+        shape = self.shapes_of(comm).get(key)
         if shape is None or comm_module(comm) is not None:  # a trainable provider keeps decisions: eager
             return self._record(key, env, policy, comm, state, rng, t)
         if shape.fn is None:
@@ -173,11 +193,13 @@ class CompiledSteps:
             return out
         if _Watched.read_step:
             fn = None
-            log.info("compile=on: the provider %s reads the time step; its steps run eager",
-                     getattr(comm, "name", type(comm).__name__))
+            if not self.said_time_step:  # once per process, not per bucket shape
+                self.said_time_step = True
+                log.info("compile=on: the provider %s reads the time step; its steps run eager",
+                         getattr(comm, "name", type(comm).__name__))
         else:
             fn = _compile(env, policy, comm)
-        self.shapes[key] = _Shape([(m, s) for m, _, s in rec.plan], fn)
+        self.shapes_of(comm)[key] = _Shape([(m, s) for m, _, s in rec.plan], fn)
         return out
 
 
@@ -212,4 +234,6 @@ _COMPILED = CompiledSteps()
 
 def reset_compiled() -> None:
     """Forget every compiled step (tests; a new policy object gets its own entries anyway)."""
-    _COMPILED.shapes.clear()
+    _COMPILED.generation += 1
+    _COMPILED.fallback.clear()
+    _COMPILED.said_time_step = False

@@ -109,9 +109,11 @@ def test_a_provider_that_reads_the_time_step_runs_eager(monkeypatch):
 
     monkeypatch.setattr(stepmod, "_compile", lambda *a: pytest.fail("a time-dependent provider must stay eager"))
     loss_e, _ = _losses_and_grads(TASKS["random-cross"](), "off", comm=Timed())
-    loss_c, _ = _losses_and_grads(TASKS["random-cross"](), "on", comm=Timed())
+    timed = Timed()
+    loss_c, _ = _losses_and_grads(TASKS["random-cross"](), "on", comm=timed)
     assert loss_c == loss_e
-    assert all(s.fn is None for s in stepmod._COMPILED.shapes.values())
+    shapes = stepmod._COMPILED.shapes_of(timed)
+    assert shapes and all(s.fn is None for s in shapes.values())
 
 
 def test_recorded_draws_are_replayed_in_order():
@@ -162,6 +164,41 @@ def test_a_checkpoint_from_before_the_key_resumes_eager_only(monkeypatch):
 def test_nearest_provider_records_its_plan_without_compiling(monkeypatch):
     """The sparse path (picks before any logit) records its draws like the dense one: one noise draw a step."""
     monkeypatch.setattr(stepmod, "_compile", lambda *a: (lambda *b: pytest.fail("not called at two steps")))
-    _losses_and_grads(TASKS["random-cross"](), "on", comm=NearestComm(2), steps=2)
-    shapes = stepmod._COMPILED.shapes
-    assert shapes and all(s.plan == [("randn", (key[4], key[4], 2))] for key, s in shapes.items())
+    nearest = NearestComm(2)
+    _losses_and_grads(TASKS["random-cross"](), "on", comm=nearest, steps=2)
+    shapes = stepmod._COMPILED.shapes_of(nearest)
+    assert shapes and all(s.plan == [("randn", (key[3], key[3], 2))] for key, s in shapes.items())
+
+
+def test_the_time_step_note_is_said_once_per_process(monkeypatch, caplog):
+    class Timed(CommBase):
+        name = "timed"
+
+        def picks(self, ctx, round):
+            n, b = ctx.obs.agent.shape[1], ctx.obs.agent.shape[0]
+            return ((torch.arange(n) + 1 + ctx.step) % n).view(1, n, 1).expand(b, n, 1)
+
+    monkeypatch.setattr(stepmod, "_compile", lambda *a: pytest.fail("a time-dependent provider must stay eager"))
+    with caplog.at_level("INFO", logger=stepmod.log.name):
+        for _ in range(2):  # two providers, two policies, train- and no-grad shapes: one note
+            _losses_and_grads(TASKS["random-cross"](), "on", comm=Timed(), steps=3)
+    assert sum("reads the time step" in r.getMessage() for r in caplog.records) == 1
+
+
+def test_compiled_steps_do_not_keep_their_provider_alive(monkeypatch):
+    """A compiled step closes over its task, policy and provider; a process-wide table of them kept every
+    provider of a select grid alive."""
+    import gc
+    import weakref
+
+    def fake_compile(env, policy, comm):  # holds all three, as torch.compile's closure does
+        return lambda state, drawn: stepmod.eager_step(env, policy, comm, state, stepmod._Replay(drawn), 0)
+
+    monkeypatch.setattr(stepmod, "_compile", fake_compile)
+    comm = FullComm()
+    _losses_and_grads(TASKS["random-cross"](), "on", comm=comm, steps=3)
+    assert any(s.fn is not None for s in stepmod._COMPILED.shapes_of(comm).values())  # something was cached
+    gone = weakref.ref(comm)
+    del comm
+    gc.collect()
+    assert gone() is None
