@@ -15,6 +15,7 @@ from neurosym_cli.tasks import make_task
 from neurosym_cli.tasks.base import Rng
 from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.tasks.random_grid import GridConfig
+from neurosym_cli.tasks.swarm import SwarmConfig
 from neurosym_cli.tasks.unlabeled_goals import UnlabeledConfig
 from neurosym_cli.utils import compiling
 from neurosym_cli.utils.cpu import runtime
@@ -22,7 +23,24 @@ from neurosym_cli.utils.cpu import runtime
 TASKS = {"random-cross": lambda: CrossConfig(name="random-cross"),
          "two-groups-cross": lambda: CrossConfig(name="two-groups-cross", num_groups=2),
          "random-grid": lambda: GridConfig(name="random-grid"),
-         "unlabeled-goals": lambda: UnlabeledConfig(name="unlabeled-goals")}
+         "unlabeled-goals": lambda: UnlabeledConfig(name="unlabeled-goals"),
+         "swarm": lambda: SwarmConfig(name="swarm", agents_per_group=6),
+         "ring": lambda: _ring()}
+"""the paper's four tasks, the swarm (a small one: the dense path) and the README's own example, examples/ring"""
+
+
+def _ring():
+    """examples/ring's config, its module importable as a user's task module is (its folder on sys.path)."""
+    import sys
+
+    from conftest import ROOT
+
+    folder = str(ROOT / "examples" / "ring")
+    if folder not in sys.path:
+        sys.path.append(folder)
+    from ring import RingConfig
+
+    return RingConfig()
 
 CPU_CFG = RunConfig(cmd="train", exp_dir="outputs/x", cpu_kernels="avx2")
 """a run under cpu_kernels=avx2 (the resume refusals compare a checkpoint with it)"""
