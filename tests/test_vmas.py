@@ -258,7 +258,7 @@ def test_a_users_own_scenario_runs_train_synth_eval(tmp_path):
     run(["train", *cd, *common], tmp_path)
     run(["synth", *cd, *common], tmp_path)
     run(["eval", *cd, *common, "baseline=prog"], tmp_path)
-    m = json.loads((tmp_path / "reach/tiny/seed0/eval/prog-k2-lam0.5-v1/metrics.json").read_text())
+    m = json.loads((tmp_path / "reach/tiny/seed0/eval/prog-k2-lam0.25-v1-scaled/metrics.json").read_text())
     assert set(m["summary"]) >= {"cost", "collisions"} and m["summary"]["cost"]["mean"] > 0  # minus -distance
     # the same seed, the same numbers: training and evaluation again in another runs root, weights and costs equal
     again = tmp_path / "again"
@@ -279,8 +279,8 @@ def test_the_pipeline_on_vmas_navigation_end_to_end(tmp_path):
     p = run(["pipeline", "task=vmas/navigation", *COMMON, "baselines=[tf-full,hard-attn,dist,prog,no-comm]"],
             tmp_path, timeout=900)
     root = tmp_path / "vmas-navigation/tiny/seed0"
-    assert (root / "synth/k2-lam0.5-v1/program.txt").exists()
-    for b in ("tf-full", "hard-attn-k2", "dist-k2", "prog-k2-lam0.5-v1", "no-comm"):
+    assert (root / "synth/k2-lam0.25-v1-scaled/program.txt").exists()
+    for b in ("tf-full", "hard-attn-k2", "dist-k2", "prog-k2-lam0.25-v1-scaled", "no-comm"):
         m = json.loads((root / f"eval/{b}/metrics.json").read_text())
         assert {"cost", "on_goal", "success", "collisions"} <= set(m["summary"]), b
     assert p.returncode == 0
