@@ -16,7 +16,7 @@ from ..errors import cut
 from ..policy.transformer import CommTransformer
 from ..utils.cpu import runtime
 from ..utils.io import ArtifactError, atomic_write_bytes
-from .commands import train_command
+from .remake import train_command
 from .layout import RunDir
 
 if TYPE_CHECKING:

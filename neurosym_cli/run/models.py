@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from ..config import ConfigError, RunConfig
 from ..policy.comm import CommProvider, comm_module, with_link_failure
 from ..utils.io import ArtifactError
-from .commands import missing_chain, retrain_command, train_command
+from .remake import missing_chain, retrain_command, train_command
 from .layout import RunDir
 
 if TYPE_CHECKING:

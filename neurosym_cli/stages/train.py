@@ -21,7 +21,7 @@ from ..policy.comm import CommProvider, comm_module
 from ..run import RunDir, train_command
 from ..run.checkpoints import (checkpoint_bytes, load_checkpoint, open_checkpoint, policy_from_payload, policy_payload,
                                refuse_other_modes)
-from ..run.commands import missing_chain
+from ..run.remake import missing_chain
 from ..run.models import baseline_comm, check_memory, comm_identity, load_gate
 from ..training import Diverged, FitSpec, FitState, ResumeMismatch, fit
 from ..utils.console import ProgressReporter, log, say, use_rich
