@@ -21,7 +21,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from neurosym_cli.run.layout import RunFolder
+from neurosym_cli.run.layout import (IMPROVEMENT_CSV, REPORT_CSV, REPORT_JSON, RunFolder, RunsRoot, seed_dir,
+                                     seeds_plane_file)
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "results" / "main-job"
@@ -54,7 +55,8 @@ def main() -> None:
     a = ap.parse_args()
     out = Path(a.out)
     base = Path(a.runs_root) / TASK / BUDGET
-    seeds = sorted(int(p.name[4:]) for p in base.glob("seed*") if p.name[4:].isdigit())
+    seeds = sorted(k for p in base.iterdir() if (k := RunsRoot.parse_seed_dir(p.name)) is not None) \
+        if base.is_dir() else []
     if not seeds:
         raise SystemExit(f"no seed directories under {base}; run: neurosym pipeline task={TASK} -m seed=0,1,2 "
                          f"runs_root={a.runs_root}")
@@ -64,18 +66,18 @@ def main() -> None:
     if p.returncode != 0:
         raise SystemExit(f"neurosym report failed: {p.stderr.strip().splitlines()[-1:]}")
     out.mkdir(parents=True, exist_ok=True)
-    for name in ("report.json", "report.csv", "improvement.csv"):
+    for name in (REPORT_JSON, REPORT_CSV, IMPROVEMENT_CSV):
         shutil.copyfile(base / name, out / name)
-    shutil.copyfile(base / f"seeds-{TASK}.png", Path(a.figure))
+    shutil.copyfile(base / seeds_plane_file(TASK), Path(a.figure))
     from run_seeds import machine  # the oracle manifest's runtime record (this script's folder is on sys.path)
 
     record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))} {a.command}".strip(),
               "date": datetime.date.today().isoformat(),
-              "machine": {**machine(base / f"seed{seeds[0]}"), "cores": os.cpu_count(),
+              "machine": {**machine(base / seed_dir(seeds[0])), "cores": os.cpu_count(),
                           "processor": platform.machine(), "threads": "0 (torch's default: the cores)"},
               "note": "per training seed: each baseline's summary over 20 evaluation seeds (mean, std ddof 1, "
                       "ci95 = 95 % t half-width, n)",
-              "seeds": {str(s): seed_record(base / f"seed{s}") for s in seeds}}
+              "seeds": {str(s): seed_record(base / seed_dir(s)) for s in seeds}}
     old = out / "seeds.json"
     if old.exists():  # seeds run in earlier sessions (run directories are not kept between them) stay
         before = json.loads(old.read_text())
@@ -85,7 +87,7 @@ def main() -> None:
             record["seeds"] = dict(sorted({**kept, **record["seeds"]}.items(), key=lambda kv: int(kv[0])))
             record["report_covers"] = [str(s) for s in seeds]  # report.json: the seeds of this runs root only
     (out / "seeds.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
-    across = json.loads((out / "report.json").read_text())["tasks"][TASK]["baselines"]
+    across = json.loads((out / REPORT_JSON).read_text())["tasks"][TASK]["baselines"]
     print(f"wrote {out}/ and {a.figure}")
     print(f"loss per seed {' / '.join(map(str, seeds))}; across seeds mean ± 95 % t half-width, max in per seed")
     for b in QUOTED:

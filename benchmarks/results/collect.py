@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from neurosym_cli.run.layout import ORACLE_DIR, RunFolder
+from neurosym_cli.run.layout import ORACLE_DIR, RunFolder, episode_stem
 from neurosym_cli.schemes.searched import program_tag, tag_prefixes
 
 from .files import FIGURES, KEEP_SELECT, METRICS, RESULTS, TRAINING, VARIANTS, entry, has_program, write
@@ -173,9 +173,10 @@ def collect_vmas(exp: Path, wall: float | None = None) -> None:
     write(path, out)
     print(f"wrote {path}: {len(out['baselines'])} baselines")
     heard = {e["label"]: e["summary"]["max_in"]["mean"] for e in out["baselines"].values()}
-    for gif in sorted(run.render_root.glob("*/episode0.gif")):  # what `neurosym render ... episode=0` drew
+    stem = episode_stem(0)
+    for gif in run.renders(stem):  # what `neurosym render ... episode=0` drew
         if heard.get(gif.parent.name):  # an episode without edges says nothing about whom agents hear
-            vmas_episode_figures(gif, FIGURES / f"{path.stem}-{gif.parent.name}-episode0")
+            vmas_episode_figures(gif, FIGURES / f"{path.stem}-{gif.parent.name}-{stem}")
 
 
 def vmas_episode_figures(gif: Path, stem: Path, frames: int = 4) -> None:

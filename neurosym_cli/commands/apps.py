@@ -17,13 +17,9 @@ from omegaconf import DictConfig, OmegaConf
 from ..config import RunConfig
 from ..errors import EXIT_CONFIG, EXIT_FAILED, cut_words, name_problem, resource_problem
 from ..schemes import SCHEMES, default_baselines
+from ..run.layout import fail_suffix  # link-failure runs are apart from the task's own: <task>-fail<p>
 from ..tasks.registry import entry_point_tasks
 from . import COMMANDS
-
-def fail_suffix(p: float) -> str:
-    """Run directories of link-failure runs are apart from the task's own: <task>-fail<p> (nothing at 0)."""
-    return f"-fail{float(p):g}" if float(p) > 0 else ""
-
 
 if not OmegaConf.has_resolver("fail_suffix"):
     OmegaConf.register_new_resolver("fail_suffix", fail_suffix)

@@ -16,12 +16,17 @@ composes them into paths, the schemes never do.
     <exp_dir>/stress/                     stress.json/.csv/.png (`neurosym stress`)
     <exp_dir>/export/<baseline label>/    an export folder, its record manifest.json (`neurosym export`)
 
+Run directories sit in a runs root as <runs_root>/<task>[-fail<p>]/<budget>/seed<k>/ (the config's exp_dir);
+``RunsRoot(runs_root)`` finds their evaluations and reads the task and link failure back from a folder's name.
+Above the run directories, `neurosym report` writes its files into <runs_root>/<task>/<budget>/ (``REPORT_*``).
+
 ``RunFolder(exp_dir)`` finds what a finished run directory holds by its path alone (reports, benchmarks);
 ``RunDir(cfg)`` adds what depends on the config's baseline.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,6 +68,64 @@ STRESS_STEM = "stress"
 """stress/stress.json, .csv and .png"""
 EXPORT_MANIFEST = MANIFEST
 """an export folder's record, which marks it as one (export/folder.py; the standalone check reads the same name)"""
+SEED_PREFIX, FAIL_INFIX = "seed", "-fail"
+"""a training seed's run directory is seed<k>; a link-failure run's task folder is <task>-fail<p>"""
+_TASK_DIR = re.compile(r"(.+?)(?:" + FAIL_INFIX + r"([0-9.e-]+))?")
+_SEED_DIR = re.compile(SEED_PREFIX + r"(\d+)")
+
+# the files `neurosym eval`'s table draws into eval/ (stages/results.write_figure)
+FIGURE2, CURVES = "figure2.png", "curves.png"
+"""eval/: every baseline evaluated in the run directory as a Figure-2-style plot, and the training curves"""
+# the files `neurosym report` writes into <runs_root>/<task>/<budget>/ (stages/results.report; benchmarks read them)
+REPORT_JSON, REPORT_CSV, IMPROVEMENT_CSV = "report.json", "report.csv", "improvement.csv"
+"""the across-seed statistics per task (JSON; CSV long: task, baseline, metric, ...) and the probability of
+improvement over training seeds"""
+REPORT_MARL_EVAL = "report_marl_eval.json"
+"""the across-seed rows in marl-eval's raw layout"""
+REPORT_PNG, REPORT_CURVES = "report.png", "report_curves.png"
+"""the across-seed Figure-2-style plot and the training curves of every seed"""
+PARETO_CSV, PARETO_PNG = "pareto.csv", "pareto.png"
+"""loss against max degree of every baseline, its non-dominated set and dominated area"""
+SEEDS_PROFILE = "seeds-profile.png"
+"""the performance profile of normalized loss over tasks and training seeds (seeds/figures.draw)"""
+
+
+def seed_dir(seed: int) -> str:
+    """seed<k>: the run directory of training seed k under <runs_root>/<task dir>/<budget>/."""
+    return f"{SEED_PREFIX}{seed}"
+
+
+def seeds_plane_file(task: str) -> str:
+    """seeds-<task>.png: one task's baselines in the loss-degree plane over training seeds (seeds/figures.draw)."""
+    return f"seeds-{task}.png"
+
+
+def fail_suffix(p: float) -> str:
+    """What follows the task's name in a link-failure run's task folder: -fail<p> (nothing at p = 0)."""
+    return f"{FAIL_INFIX}{float(p):g}" if float(p) > 0 else ""
+
+
+# the files `neurosym render` writes into render/<label>/ (stages/render.render_episode)
+def episode_stem(episode: int, window: "list[float] | tuple[float, ...] | None" = None) -> str:
+    """episode<k>, or episode<k>-window<x0>_<x1>_<y0>_<y1> for a zoom (so a zoom never replaces the whole
+    picture): the animation is <stem>.gif (or .mp4), the whole episode <stem>.png, four frames ``frames_file``."""
+    return f"episode{episode}" + ("" if window is None else "-window" + "_".join(f"{v:g}" for v in window))
+
+
+def frames_file(stem: str) -> str:
+    """<stem>-frames.png: four frames of an episode's animation."""
+    return f"{stem}-frames.png"
+
+
+# the pictures `neurosym figures` draws into figures/ (stages/render.make_figures), named after the program they show
+ATTENTION, TRAJECTORIES, FIGURE1, RULES, FIGURE5 = "attention", "trajectories", "figure1", "rules", "figure5"
+"""attention maps side by side, group paths, the paper's Figure 1, a program's rule regions, Figure 5"""
+
+
+def figure_name(kind: str, tag: str, *, episode: int | None = None, round_: int | None = None) -> str:
+    """<kind>-<tag>[-episode<k>][-round<r>].png: one of `neurosym figures`' pictures of program <tag>."""
+    return (f"{kind}-{tag}" + ("" if episode is None else f"-episode{episode}")
+            + ("" if round_ is None else f"-round{round_}") + ".png")
 
 
 class _Folder:
@@ -178,9 +241,62 @@ class _Folder:
         """The paper's figures drawn from this run directory (`neurosym figures`)."""
         return self.root / FIGURES
 
+    @property
+    def figure2_file(self) -> Path:
+        """eval/figure2.png: every baseline evaluated here (`neurosym eval`'s plot)."""
+        return self.eval_root / FIGURE2
+
+    @property
+    def curves_file(self) -> Path:
+        """eval/curves.png: the training curves of every model trained here."""
+        return self.eval_root / CURVES
+
+    def rendered(self, label: str, stem: str, suffix: str = ".gif") -> Path:
+        """render/<label>/<stem><suffix>: one of `neurosym render`'s files (``episode_stem``)."""
+        return self.render_root / label / f"{stem}{suffix}"
+
+    def renders(self, stem: str, suffix: str = ".gif") -> list[Path]:
+        """render/*/<stem><suffix> of every baseline rendered here, sorted."""
+        return sorted(self.render_root.glob(f"*/{stem}{suffix}"))
+
+    def figure_file(self, kind: str, tag: str, *, episode: int | None = None, round_: int | None = None) -> Path:
+        """figures/<kind>-<tag>[-episode<k>][-round<r>].png (``figure_name``)."""
+        return self.figures_dir / figure_name(kind, tag, episode=episode, round_=round_)
+
     def tensorboard_dir(self, run: str) -> Path:
         """TensorBoard event files of one run of this experiment (logger=tensorboard), e.g. run = "train-oracle"."""
         return self.root / TENSORBOARD / run
+
+
+@dataclass(frozen=True)
+class RunsRoot:
+    """A folder of run directories, <root>/<task>[-fail<p>]/<budget>/seed<k>/, found by its path alone."""
+
+    root: Path
+
+    def __post_init__(self):
+        object.__setattr__(self, "root", Path(self.root))
+
+    def evaluations(self) -> list[Path]:
+        """metrics.json of every evaluation of every run directory here
+        (<task dir>/<budget>/seed<k>/eval/<label>/metrics.json), sorted."""
+        return sorted(m for m in self.root.glob(f"*/*/{SEED_PREFIX}*/{EVAL}/*/{METRICS_FILE}") if m.is_file())
+
+    def runs_evaluated(self) -> list[tuple[str, str]]:
+        """(task folder, budget) of every (task, budget) here with an evaluation, in name order."""
+        return sorted({(m.parents[4].name, m.parents[3].name) for m in self.evaluations()})
+
+    @staticmethod
+    def parse_task_dir(name: str) -> tuple[str, str | None]:
+        """(task, link failure as written, or None) of a task folder's name <task>[-fail<p>]."""
+        task, fail = _TASK_DIR.fullmatch(name or "-").groups()  # type: ignore[union-attr]
+        return task, fail
+
+    @staticmethod
+    def parse_seed_dir(name: str) -> int | None:
+        """The training seed k of a run directory's name seed<k>, or None for another name."""
+        m = _SEED_DIR.fullmatch(name)
+        return int(m.group(1)) if m else None
 
 
 @dataclass(frozen=True)

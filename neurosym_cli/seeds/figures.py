@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Sequence
 
 from .. import stats
+from ..run.layout import SEEDS_PROFILE, seeds_plane_file
 from ..utils.io import check_inside
 from .read import SeedRun
 from .summary import Summary, order, summarize
@@ -63,7 +64,7 @@ def draw(by_task: dict[str, Sequence[SeedRun]], out_dir: Path, mix: bool = False
                 if n > 1 else "1 training seed: no interval across seeds")
         budget = runs[0].settings.get("budget")
         made.append(seeds_plane(pts, across, f"{task} ({budget} budget): loss against max in+out over training "
-                                f"seeds\n{what}; lower left is better", out_dir / f"seeds-{task}.png"))
+                                f"seeds\n{what}; lower left is better", out_dir / seeds_plane_file(task)))
     scores, left = normalized(by_task)
     scores = {k: v for k, v in scores.items() if k not in ("tf-full", "no-comm")}  # 1 and 0 by definition
     if scores:
@@ -81,5 +82,5 @@ def draw(by_task: dict[str, Sequence[SeedRun]], out_dir: Path, mix: bool = False
         made.append(profile_plot(curves, taus, f"performance profile of normalized loss ({budgets} budget), "
                                  f"{n_runs} runs per baseline\n1 = that seed's tf-full, 0 = its no-comm; further "
                                  "right is better",
-                                 note, out_dir / "seeds-profile.png"))
+                                 note, out_dir / SEEDS_PROFILE))
     return made

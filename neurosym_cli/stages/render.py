@@ -17,6 +17,7 @@ from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
 from . import RunInfo
 from ..run import RunDir
+from ..run.layout import ATTENTION, FIGURE1, FIGURE5, RULES, TRAJECTORIES, episode_stem, frames_file
 from ..run.models import baseline_comm, load_baseline
 
 
@@ -76,7 +77,8 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
                           f"[{lo[0]:.1f}, {hi[0]:.1f}], y in [{lo[1]:.1f}, {hi[1]:.1f}]: choose a window there, or "
                           f"render.window=null for the whole episode")
     out = RunDir(cfg).render_dir
-    stem = f"episode{cfg.episode}" + ("" if window is None else "-window" + "_".join(f"{v:g}" for v in window))
+    stem = episode_stem(cfg.episode, window)
+    stills = out / frames_file(stem)
     style = edge_style(rec, cfg.baseline)
     round_note = f", round {cfg.render.round} edges" if cfg.task.rounds > 1 else ""
     try:
@@ -84,14 +86,14 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
                                every=cfg.render.every, fps=cfg.render.fps, trail=cfg.render.trail,
                                round_=cfg.render.round - 1, crowd_from=cfg.render.crowd_from,
                                receivers=cfg.render.receivers, seed=cfg.seed,
-                               stills=out / f"{stem}-frames.png", window=window)
+                               stills=stills, window=window)
     except FileNotFoundError as e:
         raise ConfigError(str(e)) from None
     png = episode_png(rec, out / f"{stem}.png", title, window)
     log.info("episode %d: loss %.3f (time-averaged), %d steps, %d agents", cfg.episode, rec.cost.mean(), rec.steps,
              rec.n_agents)
-    say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {out / f'{stem}-frames.png'}")
-    return {"animation": str(anim), "frames": frames, "png": str(png), "stills": str(out / f"{stem}-frames.png"),
+    say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {stills}")
+    return {"animation": str(anim), "frames": frames, "png": str(png), "stills": str(stills),
             "loss": float(rec.cost.mean())}
 
 
@@ -134,7 +136,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     from ..viz import figures as fig
 
     check_episode(cfg)
-    out = RunDir(cfg).figures_dir
+    run = RunDir(cfg)
     head = f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed})"
     made: dict[str, str] = {}
     step = cfg.render.step
@@ -146,7 +148,7 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     if recs or prog:  # before anything is drawn
         check_in_episode(cfg, (recs or prog)[0][1])
     if recs:
-        made["attention"] = str(fig.attention_maps(recs, step, out / f"attention-{tag}-episode{cfg.episode}.png",
+        made["attention"] = str(fig.attention_maps(recs, step, run.figure_file(ATTENTION, tag, episode=cfg.episode),
                                                    f"{head}: attention at episode {cfg.episode}"))
     settings = _setting_episodes(cfg)
     if settings is not None:
@@ -157,12 +159,12 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
                 groups = len(set(pair[0][1].group.tolist()))
                 panels.append((f"episode {k}: {groups} group(s), N = {pair[0][1].n_agents}", pair))
         if panels:
-            made["trajectories"] = str(fig.trajectories(panels, out / f"trajectories-{tag}.png",
+            made["trajectories"] = str(fig.trajectories(panels, run.figure_file(TRAJECTORIES, tag),
                                                         f"{head}: group paths, prog-retrained solid, dist dashed"))
     if getattr(task, "figure1", False) and settings is not None:  # the task asks for the paper's Figure 1
         full, prog = _records(cfg, ["tf-full"], settings[0]), _records(cfg, ["prog-retrained"], settings[0])
         if full and prog:
-            made["figure1"] = str(fig.figure1(full[0], prog[0], out / f"figure1-{tag}.png",
+            made["figure1"] = str(fig.figure1(full[0], prog[0], run.figure_file(FIGURE1, tag),
                                               f"{head}: Figure 1, episode {settings[0]}"))
     if prog:
         prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
@@ -171,12 +173,12 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
         program = comm.program  # type: ignore[attr-defined]
         agent = cfg.render.agent  # within the episode (check_in_episode)
         for r in range(program.n_rounds):
-            name = f"rules-{tag}-episode{cfg.episode}" + (f"-round{r + 1}" if program.n_rounds > 1 else "") + ".png"
+            path = run.figure_file(RULES, tag, episode=cfg.episode, round_=r + 1 if program.n_rounds > 1 else None)
             made[f"rules{r + 1}"] = str(fig.rule_regions(
-                program, comm.fmap, task.pair_dim, rec, agent=agent, step=step, round_=r, path=out / name,
+                program, comm.fmap, task.pair_dim, rec, agent=agent, step=step, round_=r, path=path,
                 title=f"{head}: rules of {label}" + (f", round {r + 1}" if program.n_rounds > 1 else "")))
         if not rec.labelled:  # a shared goal set: the paper's Figure 5 (unlabeled goals)
-            made["figure5"] = str(fig.unlabeled_scene(label, rec, step, out / f"figure5-{tag}-episode{cfg.episode}.png",
+            made["figure5"] = str(fig.unlabeled_scene(label, rec, step, run.figure_file(FIGURE5, tag, episode=cfg.episode),
                                                       f"{head}: Figure 5, episode {cfg.episode}"))
     if not made:
         raise ArtifactError(f"no trained baselines to draw in {cfg.exp_dir}; run `neurosym pipeline "

@@ -11,7 +11,8 @@ from ..config import RunConfig
 from ..baselines import run_args
 from ..degrees import LEGEND, NAMES
 from ..run import RunDir, pipeline_command
-from ..run.layout import FIGURES, history_files, metrics_files
+from ..run.layout import (FIGURES, IMPROVEMENT_CSV, PARETO_CSV, PARETO_PNG, REPORT_CSV, REPORT_CURVES, REPORT_JSON,
+                          REPORT_MARL_EVAL, REPORT_PNG, SEED_PREFIX, RunsRoot, history_files, metrics_files)
 from ..seeds.read import SHARED as METRICS  # every evaluation's metrics, named without torch
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
@@ -111,12 +112,12 @@ def write_pareto(rows: Rows, root: Path, head: str, plot: bool = True) -> tuple[
     front = pareto_front(xy)
     ref = (1.05 * max(x for x, _ in xy) + 1e-9, 1.05 * max(y for _, y in xy))
     area = dominated_area([xy[i] for i in front], ref)
-    csv_path = root / "pareto.csv"
+    csv_path = root / PARETO_CSV
     write_csv(csv_path, [{"label": label, "max_degree": x, "loss": y, "non_dominated": int(k in front),
                           "ref_max_degree": ref[0], "ref_loss": ref[1], "dominated_area": area}
                          for k, (label, x, y) in enumerate(pts)])
     png = pareto_plot(pts, front, ref, area, head.replace(": ", ":\n") + f"\nloss against {NAMES['max_degree']}: "
-                      "the lower left is better", root / "pareto.png") if plot else None
+                      "the lower left is better", root / PARETO_PNG) if plot else None
     shown = sorted(front, key=lambda i: (pts[i][2], pts[i][1]))  # lowest loss first
     log.info("non-dominated (loss, %s), lowest loss first: %s; dominated area %.4g up to the reference point "
              "(loss %.4g, %s %.4g)", NAMES["max_degree"],
@@ -136,9 +137,9 @@ def write_figure(cfg: RunConfig) -> Path:
     from ..plotting import figure2
 
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
-                 "training curves", RunDir(cfg).eval_root / "curves.png")
+                 "training curves", RunDir(cfg).curves_file)
     return figure2(collect(Path(cfg.exp_dir), pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
-                   RunDir(cfg).eval_root / "figure2.png", err="ci95")
+                   RunDir(cfg).figure2_file, err="ci95")
 
 
 def _guard_inputs(cfg: RunConfig, program: str) -> tuple[list[str], dict[str, dict[int, float]]]:
@@ -180,7 +181,7 @@ def print_table(cfg: RunConfig, *, program: str | None = None) -> None:
         log.warning(line)
     if cfg.plots:
         png = write_figure(cfg)
-        console.print(f"plot of every baseline evaluated here: {png} (training curves: {png.with_name('curves.png')})")
+        console.print(f"plot of every baseline evaluated here: {png} (training curves: {RunDir(cfg).curves_file})")
 
 
 def across_table(s, digits: int = 3):
@@ -228,7 +229,7 @@ def write_across(by_task: dict, summaries: dict, out: Path, head: str, plots: bo
     improvement.csv, report_marl_eval.json (marl-eval's raw layout) and, with plots, the across-seed figures."""
     from .. import seeds
 
-    files = [out / "report.json", out / "report.csv", out / "improvement.csv", out / "report_marl_eval.json"]
+    files = [out / REPORT_JSON, out / REPORT_CSV, out / IMPROVEMENT_CSV, out / REPORT_MARL_EVAL]
     write_json(files[0], {"convention": {"mean ± ci95": "95 % Student-t interval across training seeds",
                                          "iqm [iqm_lo, iqm_hi]": "25 % trimmed mean, 95 % stratified bootstrap "
                                                                  "percentile interval (rliable)",
@@ -295,19 +296,19 @@ def report(cfg: RunConfig) -> dict:
                 what = ("mean ± 95 % t-interval across training seeds" if n > 1 else
                         "1 training seed: mean ± 95 % t-interval over its evaluation seeds")
                 files.append(figure2(rows, f"{head}, {n} training seed{'s' if n > 1 else ''}:\n{what}",
-                                     out / "report.png", err="err"))
+                                     out / REPORT_PNG, err="err"))
                 curves = write_curves(out, f"{head}: training curves, {n} training seed{'s' if n > 1 else ''}",
-                                      out / "report_curves.png")
+                                      out / REPORT_CURVES)
                 files += [curves] if curves else []
     except (ArtifactError, OSError) as e:  # an archived, read-only directory: the tables above are the report
         log.warning("report files not written (%s); the tables above are the report", e)
         return {"report": None}
     console.print("wrote " + ", ".join(str(f) for f in files))
     if not rc.seed_files:
-        figures = sorted(out.glob(f"seed*/{FIGURES}/*.png")) or sorted(out.glob(f"{FIGURES}/*.png"))
+        figures = sorted(out.glob(f"{SEED_PREFIX}*/{FIGURES}/*.png")) or sorted(out.glob(f"{FIGURES}/*.png"))
         if figures:  # drawn per training seed by the pipeline or `neurosym figures`
             console.print("figures of whom agents talk to: " + ", ".join(str(f) for f in figures))
-    return {"report": str(out / "report.json")}
+    return {"report": str(out / REPORT_JSON)}
 
 
 def _what_makes(cfg: RunConfig, root: Path) -> str:
@@ -315,7 +316,6 @@ def _what_makes(cfg: RunConfig, root: Path) -> str:
     names (report_dir=<runs root>/<task>[-fail<p>]/<budget>[/seed<k>], any runs root), else where report_dir must
     point."""
     import os
-    import re
     import shlex
     from importlib.resources import files
 
@@ -331,13 +331,13 @@ def _what_makes(cfg: RunConfig, root: Path) -> str:
                 + (f" and {len(others) - 3} more" if len(others) > 3 else "")
                 + f"; for {cfg.task.name} ({cfg.budget.name} budget) {make}")
     path = root.absolute()
-    seed = re.fullmatch(r"seed(\d+)", path.name)
-    run = path.parent if seed else path  # <runs root>/<task>/<budget>
-    task, fail = re.fullmatch(r"(.+?)(?:-fail([0-9.e-]+))?", run.parent.name or "-").groups()
+    seed = RunsRoot.parse_seed_dir(path.name)
+    run = path.parent if seed is not None else path  # <runs root>/<task>/<budget>
+    task, fail = RunsRoot.parse_task_dir(run.parent.name)
     if task in task_choices() and (files("neurosym_cli.conf") / "budget" / f"{run.name}.yaml").is_file():
         runs_root = run.parent.parent
         same = runs_root.resolve() == Path(os.environ.get("NEUROSYM_RUNS", "outputs")).resolve()
-        line = (f"neurosym pipeline task={task} budget={run.name}" + (f" seed={seed.group(1)}" if seed else "")
+        line = (f"neurosym pipeline task={task} budget={run.name}" + (f" seed={seed}" if seed is not None else "")
                 + (f" task.link_failure={fail}" if fail else "")
                 + ("" if same else " " + shlex.quote(f"runs_root={runs_root}")))
         return f"run `{line}` (or `neurosym eval ...`) first"
@@ -349,16 +349,11 @@ def _reports_here(cfg: RunConfig) -> list[str]:
     """The `neurosym report` line of every (task, budget) that holds evaluations in ``cfg``'s runs root
     (<runs_root>/<task>[-fail<p>]/<budget>/seed<k>/eval/<label>/metrics.json), in name order: what a bare
     `neurosym report` of the default task should point at instead of running that task."""
-    import re
-
     from ..baselines import runs_root_arg
 
-    root = Path(cfg.runs_root)
-    found = sorted({(m.parents[4].name, m.parents[3].name)
-                    for m in root.glob("*/*/seed*/eval/*/metrics.json") if m.is_file()})
     lines = []
-    for task_dir, budget in found:
-        task, fail = re.fullmatch(r"(.+?)(?:-fail([0-9.e-]+))?", task_dir).groups()  # type: ignore[union-attr]
+    for task_dir, budget in RunsRoot(Path(cfg.runs_root)).runs_evaluated():
+        task, fail = RunsRoot.parse_task_dir(task_dir)
         lines.append(f"neurosym report task={task} budget={budget}" + (f" task.link_failure={fail}" if fail else "")
                      + runs_root_arg(cfg))
     return lines
