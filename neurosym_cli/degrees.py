@@ -99,3 +99,9 @@ def objective_term(objective: str) -> str:
 def objective_legend(objective: str) -> str:
     """One line saying what the objective's degree term is."""
     return objective_form(objective).legend
+
+
+LAM_GRIDS = {"paper": [0.3, 0.5, 0.7, 1.0], "hinge": [0.3, 0.5, 0.7, 1.0], "scaled": [0.1, 0.25, 0.5, 0.75]}
+"""select.lam when it is empty, by synth.objective: lam means another thing in each objective's units. paper and
+hinge: the paper's grid (appendix B), in the task's action units; scaled: shares of silence's action gap per 2K of
+degree around its default 0.25, below 1 (at lam >= 1 no program of degree 2K beats silence; docs/fidelity.md)"""

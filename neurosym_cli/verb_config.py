@@ -75,7 +75,7 @@ class SelectConfig:
     """`neurosym select`: the paper's model selection by validation (appendix B) over a grid of configurations."""
 
     lam: list[float] = field(default_factory=list)
-    """lam values of the grid, in the units of synth.objective; empty: that objective's grid (stages/select.LAM_GRIDS:
+    """lam values of the grid, in the units of synth.objective; empty: that objective's grid (degrees.LAM_GRIDS:
     the paper's 0.3-1.0 for paper and hinge, appendix B; 0.1-0.75 for scaled)"""
     rules: list[int] = field(default_factory=lambda: [2, 3, 4, 5])
     """K values of the grid"""

@@ -59,7 +59,7 @@ def as_run(key: str, settings: dict[str, Any]) -> Any:
     """A record's setting ``key`` (of its flattened ``settings``) as what its run did, so that seeds of older and
     newer code that made the same run compare equal: a key the record predates reads as what the code did then
     (``ADDED``, ``BEFORE``; other absent keys '<absent>'); compile as the step in effect (auto: eager, as off); an
-    empty select.lam as the grid it stands for (stages/select.LAM_GRIDS of the record's objective)."""
+    empty select.lam as the grid it stands for (degrees.LAM_GRIDS of the record's objective)."""
     if key not in settings:
         return schema_default(key) if key in ADDED else BEFORE.get(key, "<absent>")
     value = settings[key]
@@ -68,7 +68,7 @@ def as_run(key: str, settings: dict[str, Any]) -> Any:
 
         return "on" if resolve(value) else "off"
     if key == "select.lam" and value == []:
-        from ..stages.select import LAM_GRIDS
+        from ..degrees import LAM_GRIDS
 
         return LAM_GRIDS.get(settings.get("synth.objective", "paper"), value)
     return value

@@ -24,7 +24,7 @@ from typing import Any
 from .. import __version__
 from ..schemes import get
 from ..config import ConfigError, RunConfig, UserError
-from ..degrees import LEGEND
+from ..degrees import LAM_GRIDS, LEGEND  # noqa: F401  (LAM_GRIDS re-exported)
 from ..baselines import run_args
 from ..run import RunDir
 from ..schemes.searched import recorded_search
@@ -37,12 +37,6 @@ from .jobs import quiet_job, run_jobs
 from .validation import choose, validate  # noqa: F401  (choose: the rule, read here by tests and benchmarks)
 
 # ------------------------------------------------------------------------------------------------- the grid
-LAM_GRIDS = {"paper": [0.3, 0.5, 0.7, 1.0], "hinge": [0.3, 0.5, 0.7, 1.0], "scaled": [0.1, 0.25, 0.5, 0.75]}
-"""select.lam when it is empty, by synth.objective: lam means another thing in each objective's units. paper and
-hinge: the paper's grid (appendix B), in the task's action units; scaled: shares of silence's action gap per 2K of
-degree around its default 0.25, below 1 (at lam >= 1 no program of degree 2K beats silence; docs/fidelity.md)"""
-
-
 def lam_grid(cfg: RunConfig) -> list[float]:
     """The lam values of the grid: select.lam, else the grid of the search's objective (``LAM_GRIDS``)."""
     return list(cfg.select.lam) or LAM_GRIDS[cfg.synth.objective]
