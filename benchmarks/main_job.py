@@ -45,6 +45,12 @@ def seed_record(exp: Path) -> dict:
             "timings": json.loads(timings.read_text()) if timings.exists() else {}}
 
 
+def finished(exp: Path) -> bool:
+    """Has every quoted baseline of this seed's run directory an evaluation (its pipeline got that far)?"""
+    labels = {f.parent.name for f in RunFolder(exp).metrics_files()}
+    return all(label_of(dict.fromkeys(labels), b) for b in QUOTED)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs_root", help="the runs root the main job ran in")
@@ -55,8 +61,8 @@ def main() -> None:
     a = ap.parse_args()
     out = Path(a.out)
     base = Path(a.runs_root) / TASK / BUDGET
-    seeds = sorted(k for p in base.iterdir() if (k := RunsRoot.parse_seed_dir(p.name)) is not None) \
-        if base.is_dir() else []
+    seeds = sorted(k for p in base.iterdir() if (k := RunsRoot.parse_seed_dir(p.name)) is not None
+                   and finished(p)) if base.is_dir() else []
     if not seeds:
         raise SystemExit(f"no seed directories under {base}; run: neurosym pipeline task={TASK} -m seed=0,1,2 "
                          f"runs_root={a.runs_root}")
@@ -98,7 +104,8 @@ def main() -> None:
             per.append(f"{m[label]['cost']['mean']:.3f}" if label else "-")
             deg.append(f"{m[label]['max_in']['mean']:.2f}" if label else "-")
         c = across.get(b, {}).get("cost")
-        print(f"  {b:20s} {' / '.join(per)}   across {c['mean']:.2f} ± {c['ci95']:.2f}   max in {' / '.join(deg)}"
+        ci = f" ± {c['ci95']:.2f}" if c and c.get("ci95") is not None else " (one seed: no interval)"
+        print(f"  {b:20s} {' / '.join(per)}   across {c['mean']:.2f}{ci}   max in {' / '.join(deg)}"
               if c else f"  {b:20s} {' / '.join(per)}")
     near = within(record, "prog-retrained", "tf-full", 0.05)
     print(f"prog-retrained within 5 % of tf-full's loss on {sum(near.values())} of {len(near)} seeds "
