@@ -3,6 +3,13 @@
     neurosym pipeline task=two-groups-cross -m seed=0,1,2 runs_root=/tmp/mainjob      # about 3 min a seed
     python benchmarks/main_job.py /tmp/mainjob                                         # docs/results/main-job/
 
+A variant beside it (issue 37: the pipeline choosing among the degree-budget front), collected seed by seed across
+sessions (seeds already in seeds.json stay; run directories are not kept between sessions):
+
+    neurosym pipeline task=two-groups-cross seed=S pipeline.select=front synth.front=true runs_root=/tmp/mjf
+    python benchmarks/main_job.py /tmp/mjf --out docs/results/main-job-front \
+        --figure docs/figures/main-job-front-seeds.png --command "pipeline.select=front synth.front=true"
+
 Writes docs/results/main-job/seeds.json (per training seed: each baseline's summary over the 20 evaluation seeds,
 the programs, the stage timings), report.json, report.csv and improvement.csv (`neurosym report` across the seeds,
 copied from the runs root) and docs/figures/main-job-seeds.png (the loss-degree plane over the seeds), and prints
