@@ -169,6 +169,19 @@ def test_parser_reports_line_and_column(text, line, col):
     assert f":{line}:{col}:" in str(e.value)
 
 
+@pytest.mark.parametrize("text,col,hint", [
+    ("random(filter(d > 3.41, l))", 17, "'>' is not an operator of the program language; use '>=' (or '<=')"),
+    ("random(filter(d < 3.41, l))", 17, "'<' is not an operator of the program language; use '<=' (or '>=')"),
+    ("random(filter(d == 3.41, l))", 17, "'==' is not an operator of the program language; a test compares with "
+                                         "'>=' or '<='"),
+])
+def test_a_missing_comparison_names_the_ones_the_language_has(text, col, hint):
+    with pytest.raises(ProgramSyntaxError) as e:
+        parse(text, source="my.txt")
+    assert str(e.value) == f"my.txt:1:{col}: {hint}"
+    assert parse(text.replace(">", ">=").replace("<", "<=").replace("==", ">=")).rounds  # the hint parses
+
+
 FAMILIES = [("formation", 0), ("unlabeled", 10)]
 
 

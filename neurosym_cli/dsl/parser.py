@@ -30,6 +30,9 @@ class ProgramSyntaxError(ValueError):
 _TOKEN = re.compile(r"(?:(?P<num>\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
                     r"|(?P<op>>=|<=|[-+*(),:]))", re.ASCII)  # ASCII: digits of other scripts are not numbers
 _SPACE = re.compile(r"\s*")
+_COMPARISON = re.compile(r"[<>=!]+")
+_USE_INSTEAD = {">": "use '>=' (or '<=')", "<": "use '<=' (or '>=')"}
+"""what to write instead of a comparison the language lacks; any other ('==', '!=', '=') gets the general hint"""
 
 MAX_LINE = 10_000
 """characters in one line of program text: a rule of the search is under 200; longer text is refused, not parsed"""
@@ -53,6 +56,15 @@ def _shown(text: str) -> str:
     return repr(text if len(text) <= 40 else text[:37] + "...")
 
 
+def _unexpected(line: str, pos: int) -> str:
+    """The message for a character no token starts with; a comparison the language lacks says which ones it has."""
+    op = _COMPARISON.match(line, pos)
+    if op is None:
+        return f"unexpected character {line[pos]!r}"
+    hint = _USE_INSTEAD.get(op.group(), "a test compares with '>=' or '<='")
+    return f"{_shown(op.group())} is not an operator of the program language; {hint}"
+
+
 def _tokenize(line: str, lineno: int, source: str) -> list[_Tok]:
     """Tokens of one line, in one left-to-right pass (linear in the line's length)."""
     if len(line) > MAX_LINE:
@@ -62,7 +74,7 @@ def _tokenize(line: str, lineno: int, source: str) -> list[_Tok]:
     while pos < len(line):
         m = _TOKEN.match(line, pos)
         if not m:
-            raise ProgramSyntaxError(f"unexpected character {line[pos]!r}", lineno, pos + 1, source)
+            raise ProgramSyntaxError(_unexpected(line, pos), lineno, pos + 1, source)
         lex = m.lastgroup or "op"
         toks.append(_Tok(lex, m.group(lex), m.start(lex) + 1))
         pos = _SPACE.match(line, m.end()).end()
