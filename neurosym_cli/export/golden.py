@@ -29,7 +29,7 @@ from ..policy.protocol import CommWrapper
 from ..policy.transformer import CommTransformer
 from ..rollout import rollout
 from ..step import Step
-from ..tasks.base import Rng, Task
+from ..tasks.base import Rng, Target, Task, applied_action
 
 FORMAT = "neurosym-golden/1"
 
@@ -68,11 +68,11 @@ class _TapComm(CommWrapper):
 class _TapSteps:
     """The recorder of a golden episode: each step's observation, masks and applied action (batch 0)."""
 
-    target: object  # Task.target: the action as applied
+    target: Target  # (action, agent) -> the action as applied (tasks.base.applied_action)
     steps: list = field(default_factory=list)
 
     def __call__(self, s: Step) -> None:
-        act = self.target(s.out.action)  # type: ignore[operator]
+        act = self.target(s.out.action, s.obs.agent)
         self.steps.append((s.obs.agent[0].cpu(), s.obs.rel[0].cpu(), [m[0].cpu() for m in s.out.masks], act[0].cpu()))
 
 
@@ -93,7 +93,7 @@ def record(task: Task, policy: CommTransformer, comm: CommProvider, program: Pro
     rounds = policy.n_rounds
     for k in range(episodes):
         state, gen, seed = protocol_episode(task, k)
-        tap_c, tap_p = _TapComm(comm), _TapSteps(task.target)
+        tap_c, tap_p = _TapComm(comm), _TapSteps(applied_action(task))
         traj = rollout(task, policy, tap_c, state.to(device), Rng([gen], device), task.horizon,
                        record=tap_p)
         agent = torch.stack([s[0] for s in tap_p.steps]).float().numpy()

@@ -42,8 +42,9 @@ def readme(manifest: dict, golden: dict, program: Program | None, vocab: Feature
            f"- `me` = s_i: agent i's own input, {ds} floats, as the task observes it (world units).",
            f"- `others[j]` = o_ij: agent i's view of agent j, {dp} floats (by convention the first two are the "
            "offset x_j - x_i, world units). Row i is ignored.",
-           f"- the action: {a} floats, as the task applies it (`Task.target` is inside the model: for the "
-           "formation tasks the velocity clipped to the speed limit, for unlabeled goals the goal weights).", "",
+           f"- the action: {a} floats, as the task applies it (`Task.target`, of the action and the agent's own "
+           "`me`, is inside the model: for the formation tasks the velocity clipped to the speed limit, for "
+           "unlabeled goals the goal weights).", "",
            "## What each agent broadcasts and receives, per step", "",
            "1. Every agent broadcasts a cheap position beacon; from everyone's beacons each agent forms its own "
            "`others` (o_ij). Nothing else goes to everybody.",
@@ -87,7 +88,8 @@ def readme(manifest: dict, golden: dict, program: Program | None, vocab: Feature
                 f"nobody; an agent in two slots is heard once) -> `action` float32 (B, N, {a}).",
                 "- `agent/encode.onnx` s (M, Ds) -> h (M, D); `agent/message<r>.onnx` x (M, D), o_ji (M, Dp) -> "
                 "m (M, D); `agent/receive<r>.onnx` x, h (M, D), o_ij (M, K, Dp), m (M, K, D), valid (M, K) bool -> "
-                "y (M, D), the next round's x; `agent/act.onnx` y (M, D) -> action (M, A). Round 1's x is h.", ""]
+                "y (M, D), the next round's x; `agent/act.onnx` y (M, D), and s (M, Ds) where the task's "
+                "target reads the agent's own input -> action (M, A). Round 1's x is h.", ""]
     eps = ", ".join(f"{e['episode']} (eval seed {e['eval_seed']}, {e['steps']} steps, {e['agents']} agents"
                     + (f", loss {e['loss']:.6g}" if "loss" in e else "") + ")" for e in golden["episodes"])
     out += ["## Golden vectors", "",

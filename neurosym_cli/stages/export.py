@@ -84,6 +84,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     from ..export.policy import OPSET, export_policy
     from ..export.readme import readme
     from ..tasks import make_task
+    from ..tasks.base import applied_action
     from ..utils.io import atomic_write_bytes
     from ..utils.seeding import seed_everything
     from ..run.models import baseline_comm, load_baseline
@@ -127,7 +128,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
         files += ["golden.npz", "golden.json"]
         if policy is not None:
             e = 0
-            files += export_policy(policy, task.target, torch.from_numpy(arrays[f"e{e}_agent"][:1]),
+            files += export_policy(policy, applied_action(task), torch.from_numpy(arrays[f"e{e}_agent"][:1]),
                                    torch.from_numpy(arrays[f"e{e}_rel"][:1]),
                                    torch.from_numpy(arrays[f"e{e}_picks"][:1]), tmp)
         standalone = Path(__file__).resolve().parents[1] / "export" / "standalone"

@@ -17,7 +17,7 @@ import torch
 from torch import Tensor
 
 from ..run.checkpoints import load_payload, non_finite, save_checkpoint
-from ..tasks.base import Task, Rng
+from ..tasks.base import Rng, Task, applied_action
 from ..utils.console import log
 from ..utils.io import ArtifactError
 from ..policy.comm import FullComm
@@ -30,7 +30,7 @@ from ..step import Step
 class DataBucket:
     agent: Tensor  # (S, N, Ds) policy inputs s_i
     rel: Tensor  # (S, N, N, 2) observations o_ij
-    target: Tensor  # (S, N, A) the oracle's effective action
+    target: Tensor  # (S, N, A) the oracle's effective action (Task.target of its action and s_i)
 
     @property
     def states(self) -> int:
@@ -45,11 +45,12 @@ def collect(env: Task, policy: CommTransformer, rollouts: int, stride: int, gen:
             device: torch.device, chunk: int = 50) -> list[DataBucket]:
     """Roll out the oracle ``rollouts`` times (in chunks), keeping every ``stride``-th step."""
     by_n: dict[int, list[tuple[Tensor, Tensor, Tensor]]] = {}
+    applied = applied_action(env)
 
     def keep(s: Step) -> None:
         if s.t % stride == 0:
             by_n.setdefault(s.state.n_agents, []).append(
-                (s.obs.agent.cpu(), s.obs.rel.cpu(), env.target(s.out.action).cpu()))
+                (s.obs.agent.cpu(), s.obs.rel.cpu(), applied(s.out.action, s.obs.agent).cpu()))
 
     policy.eval()
     rng = Rng(gen, device)

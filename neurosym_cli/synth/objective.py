@@ -32,7 +32,7 @@ from torch import Tensor
 from ..dsl.ast import Program, RandomRule, Rule
 from ..degrees import objective_form
 from ..dsl.interpret import dedup_valid, picks_to_mask, rule_picks
-from ..tasks.base import Task, Observation
+from ..tasks.base import Observation, Task, applied_action
 from ..policy.transformer import CommTransformer
 from . import kernels
 from .dataset import DataBucket
@@ -116,6 +116,7 @@ class CachedScorer:
         # compiled bookkeeping and rule scans on CPU; torch elsewhere (GPUs, no numba) and as the reference
         self.compiled = kernels.use_compiled(backend, device)
         self.env, self.round, self.lam, self.objective, self.cap = env, round_idx, lam, objective, cap
+        self.applied = applied_action(env)  # (action, agent) -> the action as the task applies it
         self.form = objective_form(objective)
         self.samples, self.device = samples, device
         # every (bucket, rule position, sample) draws its uniforms from its own seed: random rules at different
@@ -247,7 +248,7 @@ class CachedScorer:
     def _l1_rows(self, d: Prepared, rows: Tensor, picks: Tensor, valid: Tensor) -> Tensor:
         """(M,) L1 action error of the given rows (only valid for the last round)."""
         y = self._round_out(d, rows, picks, valid)
-        a = self.env.target(self.policy.head(y))
+        a = self.applied(self.policy.head(y), d.agent_flat.index_select(0, rows))
         return (a - d.target_flat.index_select(0, rows)).abs().sum(-1)
 
     def _l1_later(self, d: Prepared, x: Tensor) -> Tensor:
@@ -255,7 +256,7 @@ class CachedScorer:
         y = x.view(d.s, d.n, -1)
         for (a, c), layer in zip(d.later, self.policy.rounds[self.round + 1:]):
             y = layer._post(y, torch.bmm(a, layer.value(y)) + c)
-        out = self.env.target(self.policy.head(y))
+        out = self.applied(self.policy.head(y), d.agent)
         return (out - d.target).abs().sum(-1).flatten()
 
     # ------------------------------------------------------------------------------------------ score
@@ -431,7 +432,7 @@ class CachedScorer:
                         return picks_to_mask(picks, d.n)
 
                     out = self.policy(obs, select)
-                    a = self.env.target(out.action)
+                    a = self.applied(out.action, d.agent[sl])
                     l1_sum += float((a - d.target[sl]).abs().sum())
                     pk = masks["picks"]
                     deg_sum += float(degree_term(pk, dedup_valid(pk), d.n, self.objective, self.cap).sum())

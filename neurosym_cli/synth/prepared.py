@@ -63,6 +63,7 @@ class Prepared:
                            .sum(2) for c in range(0, self.s, ch)])  # (S, N, D)
             self.later.append((a, c))
         self.target_flat = self.target.reshape(self.s * self.n, -1)  # (S N, A)
+        self.agent_flat = self.agent.reshape(self.s * self.n, -1)  # (S N, Ds): what a task's target may read
         self.uniforms: dict[tuple[int, int], Tensor] = {}
         # memo of each agent's L1 error per set of picked agents: a proposal often gives an agent a set it had
         # under an earlier program (a rule moved back, another rule changed). A set is named by the sum of random

@@ -19,6 +19,8 @@ detaches: gradients flow from the cost back through the dynamics (paper section 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import inspect
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence, TypeVar, runtime_checkable
 
@@ -207,11 +209,43 @@ class Task(Protocol):
 
     def cost(self, next_state: TaskState, action: Tensor) -> Tensor: ...
 
-    def target(self, action: Tensor) -> Tensor: ...
+    def target(self, action: Tensor, agent: Tensor) -> Tensor:
+        """action (..., A) -> the action as it acts (what programs imitate); ``agent`` (..., Ds) is each agent's own
+        input s_i, for a target that depends on the agent (a per-agent speed limit read from s_i). A target that
+        needs only the action may be written ``target(self, action)``; callers go through :func:`applied_action`."""
+        ...
 
     def metrics(self, state: TaskState) -> dict[str, Tensor]: ...
 
     def features(self, version: str) -> FeatureMap: ...
+
+
+Target = Callable[["Tensor", "Tensor"], "Tensor"]
+"""action (..., A) the transformer's output, agent (..., Ds) each agent's own input s_i (same leading axes) ->
+(..., A) the action as the task applies it (Task.target: what programs imitate and exports output)"""
+
+
+@functools.cache
+def target_reads_agent(cls: type) -> bool:
+    """Whether ``cls.target`` is ``target(action, agent)``: True; the older ``target(action)``: False. Read once per
+    class (registry.task_class reads it when a task is registered); a target taking no action is a ConfigError."""
+    params = list(inspect.signature(cls.target).parameters.values())[1:]  # after self
+    if any(p.kind is p.VAR_POSITIONAL for p in params):
+        return True
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    if not positional:
+        raise ConfigError(f"{cls.__name__}.target takes no action: write target(self, action, agent) or "
+                          "target(self, action) (docs/extending.md)")
+    return len(positional) >= 2
+
+
+def applied_action(task: Any) -> Target:
+    """The task's target as ``(action, agent) -> applied action`` (:data:`Target`), whichever form it is written in:
+    a target of the action alone ignores ``agent``."""
+    if target_reads_agent(type(task)):
+        return task.target
+    target = task.target
+    return lambda action, agent: target(action)
 
 
 REQUIRED = ("reset", "test_episodes", "observe", "step", "cost", "target", "metrics", "features")

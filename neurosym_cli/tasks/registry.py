@@ -21,7 +21,7 @@ from typing import Any, Iterable
 
 from ..config import TaskConfig
 from ..errors import ConfigError
-from .base import DIMENSIONS, REQUIRED
+from .base import DIMENSIONS, REQUIRED, target_reads_agent
 
 ENTRY_POINTS = "neurosym.tasks"
 """entry-point group of installed task packages: name -> 'package.module:Class'"""
@@ -102,6 +102,7 @@ def task_class(target: str) -> type:
     if missing:
         raise ConfigError(f"task class {target} lacks {', '.join(f'{m}()' for m in missing)} of the task protocol "
                           f"(docs/extending.md)")
+    target_reads_agent(cls)  # its form, read once here; a target taking no action is refused
     schema = getattr(cls, "Config", None)
     if not (inspect.isclass(schema) and dataclasses.is_dataclass(schema) and issubclass(schema, TaskConfig)):
         raise ConfigError(f"task class {target} needs `Config`, a dataclass schema extending "

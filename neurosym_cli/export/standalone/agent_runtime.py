@@ -8,7 +8,7 @@ do with what it hears (agent/*.onnx). numpy and onnxruntime; nothing of neurosym
         asked = me.whom(r, uniform)               # program: one agent per rule (-1: nobody)
         # send a request to each agent in set(asked) - {-1}; each answers with   m = it.message(r, i)
         me.receive(r, asked, {j: m_j})            # only the answers of the agents asked
-    action = me.act()                             # the action as the task applies it (speed clip inside)
+    action = me.act()                             # the action as the task applies it (target inside, of it and s_i)
 """
 
 from __future__ import annotations
@@ -105,7 +105,8 @@ class Agent:
     def act(self):
         """The action (A,) as the task applies it, from the last round's output; ``self.raw`` keeps the
         transformer's output before the task's target (what a simulator's Task.step takes)."""
-        action, raw = self.team.act.run(None, {"y": self.x[-1]})
+        feeds = {"y": self.x[-1], "s": self.me[None]}  # act.onnx has s only where the task's target reads it
+        action, raw = self.team.act.run(None, {i.name: feeds[i.name] for i in self.team.act.get_inputs()})
         self.raw = raw[0]
         return action[0]
 
