@@ -16,7 +16,18 @@ from ..run.layout import RunFolder, is_front_pick
 from ..utils.io import ArtifactError
 
 METRICS = SHARED + ("collisions",)
-"""what the tables report: the shared metrics, then the paper tasks' own (a task without it reports without it)"""
+"""what the tables report first: the shared metrics, then the paper tasks' own (a task without it reports without
+it); any other metric an evaluation holds follows (metric_order)"""
+
+NOT_METRICS = ("seed", "episodes")
+"""the keys of a per-evaluation-seed row that say which seed it is, not how it went"""
+
+
+def metric_order(keys: Iterable[str]) -> list[str]:
+    """The metric keys among ``keys`` in the order every table shows them: METRICS first, then any other a task
+    (``Task.metrics``) or a scheme records, in the order first met."""
+    found = list(dict.fromkeys(k for k in keys if k not in NOT_METRICS))
+    return [m for m in METRICS if m in found] + [k for k in found if k not in METRICS]
 
 METHOD = "prog-retrained"
 """the baseline whose probability of improvement over every other one is reported"""
@@ -129,14 +140,14 @@ def _key_of(baseline: str, found: list[tuple[str, dict]], pick: dict | None, lab
     return label
 
 
-def non_finite(rows: Iterable[Any], metrics: Sequence[str] = METRICS) -> str | None:
-    """Where the first nan or inf among the ``metrics`` of per-evaluation-seed rows is ("cost of evaluation seed 3
-    is nan"), or None. JSON readers accept NaN and Infinity, and one of them turns every mean, interval, IQM and
+def non_finite(rows: Iterable[Any], metrics: Sequence[str] | None = None) -> str | None:
+    """Where the first nan or inf among the ``metrics`` (default: every metric of the row) of per-evaluation-seed
+    rows is ("cost of evaluation seed 3 is nan"), or None. JSON readers accept NaN and Infinity, and one of them turns every mean, interval, IQM and
     Pareto front it enters into nan or inf that print as results."""
     for i, r in enumerate(rows):
         if not isinstance(r, dict):
             continue
-        for m in metrics:
+        for m in metric_order(r) if metrics is None else metrics:
             v = r.get(m)
             if isinstance(v, (int, float)) and not isinstance(v, bool) and not math.isfinite(v):
                 return f"{m} of evaluation seed {r.get('seed', i)} is {v}"
@@ -160,8 +171,8 @@ def _rows(per_seed: Any, where: str, again: str = "evaluate it again") -> list[d
                     for r in per_seed)):
         raise ArtifactError(f"{where} has no per-evaluation-seed rows with {', '.join(SHARED)}; evaluate it again")
     refuse_non_finite(per_seed, where, again)
-    return [{m: float(r[m]) for m in METRICS if isinstance(r.get(m), (int, float))} | {"seed": r.get("seed")}
-            for r in per_seed]
+    return [{m: float(r[m]) for m in metric_order(r) if isinstance(r[m], (int, float)) and not isinstance(r[m], bool)}
+            | {"seed": r.get("seed")} for r in per_seed]
 
 
 def _remake(seed_dir: Path, verb: str, files: list[Path]) -> str:

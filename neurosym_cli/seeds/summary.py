@@ -8,7 +8,7 @@ from typing import Any, Iterable, Sequence
 
 from .. import stats
 from ..errors import UserError
-from .read import METHOD, METRICS, PAIRS, SeedRun, check_same
+from .read import METHOD, PAIRS, SeedRun, check_same, metric_order
 
 @dataclass
 class Summary:
@@ -51,7 +51,8 @@ def summarize(runs: Sequence[SeedRun], mix: bool = False, reps: int = stats.REPS
         row_seeds[key] = [r.seed for r in have]
         labels[key] = [r.entries[key].label for r in have]
         rows[key] = {}
-        for m in [m for m in METRICS if all(m in r.entries[key].rows[0] for r in have)]:
+        first = have[0].entries[key].rows[0]
+        for m in [m for m in metric_order(first) if all(m in r.entries[key].rows[0] for r in have)]:
             s = stats.across_seeds([r.entries[key].mean(m) for r in have], reps, seed)
             if len(have) == 1:  # one training seed: what it has is the interval over its evaluation seeds
                 s["eval_ci95"] = have[0].entries[key].eval_ci(m)
@@ -156,7 +157,7 @@ def marl_eval(by_task: dict[str, Sequence[SeedRun]], environment: str = "neurosy
         for r in runs:
             steps = step_count(str(r.settings.get("budget")))
             for key, e in r.entries.items():
-                vals = {m: [row[m] for row in e.rows] for m in METRICS if m in e.rows[0]}
+                vals = {m: [row[m] for row in e.rows] for m in metric_order(e.rows[0])}
                 algos.setdefault(key, {})[f"seed{r.seed}"] = {"step_1": {"step_count": steps, **vals},
                                                               "absolute_metrics": vals}
         out[environment][task] = algos

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Iterable
 
 from .. import schemes
 from ..config import RunConfig
@@ -14,6 +15,7 @@ from ..run import RunDir, pipeline_command
 from ..run.layout import (FIGURES, IMPROVEMENT_CSV, PARETO_CSV, PARETO_PNG, REPORT_CSV, REPORT_CURVES, REPORT_JSON,
                           REPORT_MARL_EVAL, REPORT_PNG, SEED_PREFIX, RunsRoot, history_files, metrics_files)
 from ..seeds.read import SHARED as METRICS  # every evaluation's metrics, named without torch
+from ..seeds.read import metric_order
 from ..stats import mean_ci
 from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
@@ -21,7 +23,14 @@ from .guard import PROGRAM_PREFIXES, communication_guard
 
 COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
            ("collisions", "collisions")]
-"""(metric, column title) of every results table"""
+"""(metric, column title) of every results table; any other metric the evaluations hold follows (columns)"""
+
+
+def columns(metrics: Iterable[str]) -> list[tuple[str, str]]:
+    """(metric, column title) of a table whose rows hold ``metrics``: COLUMNS, then every other metric present (a
+    task's own, ``Task.metrics``, or a scheme's), titled by its key, in the order first met."""
+    known = {m for m, _ in COLUMNS}
+    return COLUMNS + [(m, NAMES.get(m, m)) for m in metric_order(metrics) if m not in known]
 
 Rows = list[tuple[str, dict]]
 """(label, summary) per evaluated baseline; a summary maps each metric to its mean, std, ..."""
@@ -171,7 +180,8 @@ def print_table(cfg: RunConfig, *, program: str | None = None) -> None:
     under it judges the run's own program (``program``: the file prog and prog-retrained ran under, cfg.program by
     default, "" for the searched one)."""
     rows = collect(Path(cfg.exp_dir), pipeline_command(cfg))
-    console.print(metrics_table(title(cfg), rows, COLUMNS, err="ci95", caption=LEGEND))
+    console.print(metrics_table(title(cfg), rows, columns(m for _, s in rows for m in s), err="ci95",
+                                caption=LEGEND))
     labels, per_seed = _guard_inputs(cfg, cfg.program if program is None else program)
     line = communication_guard(rows, labels=labels, rerun=f"neurosym synth baseline=prog {run_args(cfg)}",
                                per_seed=per_seed, settings={"synth.front": cfg.synth.front,
@@ -195,14 +205,15 @@ def across_table(s, digits: int = 3):
               caption=f"{seeds.caption(n)}\n{LEGEND}", header_style="bold", caption_justify="left")
     t.add_column("baseline")
     t.add_column("n seeds", justify="right")
-    for _, head in COLUMNS:
+    cols = columns(k for m in s.rows.values() for k in m)
+    for _, head in cols:
         t.add_column(head, justify="right")
     if n > 1:
         t.add_column("loss IQM [bootstrap 95 %]", justify="right")
     for key, m in s.rows.items():
         one = m["cost"]["n"] == 1
-        cells = [(f"{m[k]['mean']:.{digits}f} ± {m[k]['eval_ci95']:.{digits}f}" if one and n == 1
-                  else seeds.fmt_mean(m[k], digits)) for k, _ in COLUMNS]
+        cells = [("-" if k not in m else f"{m[k]['mean']:.{digits}f} ± {m[k]['eval_ci95']:.{digits}f}"
+                  if one and n == 1 else seeds.fmt_mean(m[k], digits)) for k, _ in cols]
         t.add_row(key, str(m["cost"]["n"]), *cells, *([seeds.fmt_iqm(m["cost"], digits)] if n > 1 else []))
     return t
 
