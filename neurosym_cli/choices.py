@@ -46,6 +46,10 @@ def check_choices(args: list[str], sources: dict[str, str] | None = None) -> str
             return None
         for v in value.split(","):  # sweeps: task=a,b
             if v not in known and not v.startswith(("glob(", "choice(", "range(")):
+                if key == "baseline":  # the nearest scheme and every one, or why an installed plugin cannot be used
+                    from neurosym_cli.schemes.registry import unknown
+
+                    return unknown(v)
                 where = f" (the default set by {sources[key]})" if key in (sources or {}) else ""
                 near = difflib.get_close_matches(v, known, n=1, cutoff=0.6)
                 hint = f"; did you mean {key}={near[0]}? (choices: {', '.join(known)})" if near else \

@@ -65,6 +65,9 @@ def usage() -> str:
     lines += ["", EXAMPLES.rstrip(), ""]
     lines += [f"{group}s: {', '.join(choices(group))}" for group in ("task", "budget")]
     lines += ["baselines:"] + [f"  {b.name:<19} {b.description}" for b in SCHEMES.values()]
+    from neurosym_cli.schemes.registry import PROBLEMS
+
+    lines += [f"  {name:<19} not usable: {why}" for name, why in PROBLEMS.items()]  # installed plugins that fail
     return "\n".join(lines) + "\n"
 
 
@@ -296,7 +299,9 @@ def _main() -> None:
         argv = ["train", *argv]
     cmd, rest = argv[0], argv[1:]
     if cmd not in COMMANDS:
-        print(f"neurosym: error: unknown command {cmd!r}; choose one of: {', '.join(COMMANDS)}", file=sys.stderr)
+        from neurosym_cli.errors import unknown_command
+
+        print(f"neurosym: error: {unknown_command(cmd, COMMANDS)}", file=sys.stderr)
         raise SystemExit(2)
     if cmd == "export":  # `neurosym export --check`: Hydra has no flags of its own for a verb, so it is an override
         rest = ["export.check=true" if a == "--check" else a for a in rest]
@@ -312,6 +317,14 @@ def _main() -> None:
         raise SystemExit(2) from None
     os.environ[defaults.SOURCES_ENV] = defaults.describe(sources)  # the job's first log line names them
     add_import_paths(import_paths(rest))  # a user's task module, beside their config directory or in the cwd
+    from neurosym_cli.schemes.registry import targets_in
+
+    rest, bad = targets_in(rest)  # baseline._target_=pkg.Class: registered, then baseline=<its name>
+    if bad:
+        from neurosym_cli.errors import cut_words
+
+        print(f"neurosym {cmd}: error: {cut_words(bad)}", file=sys.stderr)
+        raise SystemExit(2)
     from neurosym_cli import argv as words
     from neurosym_cli.overrides import known_keys
 

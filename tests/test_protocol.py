@@ -20,6 +20,7 @@ from neurosym_cli.synth.tree import TreeModel
 from neurosym_cli.tasks import Rng, make_task, probe
 from neurosym_cli.tasks.formation import FormationState
 from neurosym_cli.tasks.random_cross import CrossConfig
+from plugin_schemes import ALL_SCHEMES, use
 
 PROGRAM = "argmax(map(-1.0*d, filter(d >= 0.0, l)))\n"  # deterministic: each agent hears its nearest
 
@@ -48,8 +49,9 @@ def _ctx(n: int = 7, batch: int = 3, seed: int = 0) -> CommContext:
     return CommContext(env, state, env.observe(state, Rng(g)), Rng(g), 0)
 
 
-@pytest.mark.parametrize("name", list(SCHEMES))
-def test_every_schemes_provider_satisfies_the_protocol(name, tmp_path):
+@pytest.mark.parametrize("name", ALL_SCHEMES)
+def test_every_schemes_provider_satisfies_the_protocol(name, tmp_path, monkeypatch):
+    use(name, monkeypatch)  # the example plugin (examples/schemes) beside the built-in ones
     cfg, comm = _provider(name, tmp_path)
     assert isinstance(comm, CommBase)
     assert isinstance(comm.name, str) and comm.name and comm.inner is None and unwrap(comm) is comm

@@ -22,6 +22,7 @@ from neurosym_cli.policy.comm import CommContext, LinkFailure
 from neurosym_cli.schemes import SCHEMES, default_baselines, get, model_baseline, rank
 from neurosym_cli.stages.graph import plan, requires, upstream
 from neurosym_cli.stages.synth import SYNTHESIZERS
+from plugin_schemes import ALL_SCHEMES, use
 
 
 def _ctx(n: int, step: int = 0, batch: int = 3, seed: int = 0) -> CommContext:
@@ -113,8 +114,9 @@ def dataclasses_replace(obj, **kw):
 
 # --- the registry's contract ---------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("name", list(SCHEMES))
-def test_every_scheme_answers_every_question(name, tmp_path):
+@pytest.mark.parametrize("name", ALL_SCHEMES)
+def test_every_scheme_answers_every_question(name, tmp_path, monkeypatch):
+    use(name, monkeypatch)  # the example plugin (examples/schemes) beside the built-in ones
     cfg = compose_config("eval", ["task=random-cross", "budget=tiny", f"baseline={name}", f"runs_root={tmp_path}"])
     b = cfg.baseline
     assert isinstance(b, BaselineConfig) and type(b) is type(SCHEMES[name]) and b == SCHEMES[name]
@@ -156,8 +158,9 @@ def test_every_scheme_answers_every_question(name, tmp_path):
             b.provider(cfg, env)
 
 
-@pytest.mark.parametrize("name", list(SCHEMES))
-def test_the_plan_of_every_baseline_runs(name):
+@pytest.mark.parametrize("name", ALL_SCHEMES)
+def test_the_plan_of_every_baseline_runs(name, monkeypatch):
+    use(name, monkeypatch)
     stages = plan([name])
     assert stages[-1] == Stage("eval", name) and len(stages) == len(set(stages))
     for k, s in enumerate(stages):

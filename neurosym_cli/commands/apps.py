@@ -41,8 +41,19 @@ _schema.baselines = default_baselines()  # the pipeline's default, from the regi
 _store.store(name="run_schema", node=_schema)
 for _name, _target in entry_point_tasks().items():  # installed packages' tasks: task=<name> (tasks/registry.py)
     _store.store(group="task", name=_name, node={"_target_": _target, "name": _name})
-for _b in SCHEMES.values():  # the config group baseline=..., one option per scheme, its class the schema
-    _store.store(group="baseline", name=_b.name, node=_b)
+_stored: dict[str, object] = {}
+
+
+def store_schemes() -> None:
+    """The config group baseline=..., one option per registered scheme, its class the schema (again for a scheme
+    registered since, by ``baseline._target_`` in compose_config)."""
+    for b in SCHEMES.values():
+        if _stored.get(b.name) is not b:
+            _store.store(group="baseline", name=b.name, node=b)
+            _stored[b.name] = b
+
+
+store_schemes()
 
 
 def _make(name: str):
@@ -106,12 +117,16 @@ def compose_config(cmd: str, overrides: list[str] | None = None, config_dir: str
 
     from ..errors import UserError
     from ..overrides import check
+    from ..schemes.registry import targets_in
     from ..tasks.registry import add_import_paths, force_task_keys, import_paths, task_schemas
     from ._run import typed_config
 
-    items = list(overrides or [])
     extra = ["--config-dir", str(config_dir)] if config_dir else []
     add_import_paths(import_paths(extra))
+    items, bad = targets_in(list(overrides or []))  # baseline._target_=pkg.Class: registered, then baseline=<name>
+    if bad:
+        raise UserError(bad)
+    store_schemes()
     schemas = task_schemas(items + extra, cmd)
     bad = check(items, schemas)
     if bad:

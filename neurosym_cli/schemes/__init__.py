@@ -4,22 +4,26 @@ what a scheme builds imports torch when it is built).
 Everything else is derived from ``SCHEMES``: the config group ``baseline=`` (commands/apps.py stores each entry as
 an option, its class as the schema), the pipeline's stage graph (stages/graph.py), the order and colours of every
 results table and figure, the default of ``baselines=`` and the lists in ``neurosym --help``. A new baseline is one
-class (families.py: ``OwnRule`` for a fixed rule with its own model) and one entry here; docs/extending.md.
+class (families.py: ``OwnRule`` for a fixed rule with its own model) and one entry here; a scheme outside the package
+is the same class, registered by the same ``registry.register`` through an entry point or ``baseline._target_``
+(registry.py; docs/extending.md, section 6).
 """
 
 from __future__ import annotations
 
 from ..baselines import ORACLE, BaselineConfig
 from ..errors import ConfigError
+from . import registry
 from .comm_range import CommRange
 from .expo import Expo
 from .gated import Gated
 from .paper import Full, Nearest, Silent, TopK
 from .searched import Program, RetrainedProgram, RetrainedTree, Tree
 
-__all__ = ["ORACLE", "SCHEMES", "default_baselines", "get", "model_baseline", "rank", "with_run"]
+__all__ = ["BUILTIN", "ORACLE", "SCHEMES", "default_baselines", "get", "model_baseline", "rank", "register",
+           "with_run"]
 
-SCHEMES: dict[str, BaselineConfig] = {b.name: b for b in (
+BUILTIN: tuple[BaselineConfig, ...] = (
     Full("tf-full", "the oracle: soft attention over every other agent (paper section 3.1)"),
     TopK("hard-attn", "the oracle, each agent hears only its k = rules largest attention logits"),
     Nearest("dist", "a transformer trained and run hearing its k = rules nearest agents"),
@@ -35,14 +39,21 @@ SCHEMES: dict[str, BaselineConfig] = {b.name: b for b in (
          pipeline=False),
     CommRange("comm-range", "its own transformer, each agent hears every agent within baseline.radius (BenchMARL "
               "from_pos)", pipeline=False),
-)}
-"""name -> baseline, in the paper's order (the order of every table), the follow-ups after it."""
+)
+"""the package's own schemes, in the paper's order (the order of every table), the follow-ups after it"""
+
+SCHEMES: dict[str, BaselineConfig] = registry.SCHEMES
+"""name -> baseline: the built-in ones in the paper's order, then the plugins (registry.py)."""
+
+register = registry.register
+for _b in BUILTIN:
+    register(_b, "neurosym_cli")
 
 
 def get(name: str) -> BaselineConfig:
     """The baseline of that name; an unknown name is a one-line error listing the choices."""
     if name not in SCHEMES:
-        raise ConfigError(f"unknown baseline {name!r}; choose one of: {', '.join(SCHEMES)}")
+        raise ConfigError(registry.unknown(name))
     return SCHEMES[name]
 
 
@@ -70,3 +81,7 @@ def model_baseline(model_dir: str) -> tuple[str, bool]:
     if not best:
         return model_dir, False
     return name, SCHEMES[name].weights().verb == "retrain"
+
+
+registry.load_plugins()  # installed packages' schemes and this command line's baseline._target_, once all of the
+# above is defined: a plugin module may import this package while it loads

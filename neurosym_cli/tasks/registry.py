@@ -20,39 +20,40 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..config import TaskConfig
-from ..errors import ConfigError
+from ..errors import ConfigError, did_you_mean
 from .base import DIMENSIONS, REQUIRED, target_reads_agent
 
 ENTRY_POINTS = "neurosym.tasks"
 """entry-point group of installed task packages: name -> 'package.module:Class'"""
 
 
-def import_target(target: str) -> Any:
+def import_target(target: str, *, key: str = "task._target_") -> Any:
     """The object at ``package.module.Class`` (or ``package.module:Class``); a one-line error when it does not
-    import, with the import error's message."""
+    import, with the import error's message. ``key``: where the path was given (task._target_, baseline._target_,
+    an entry point), named in the errors."""
     if not isinstance(target, str) or not target.strip():
-        raise ConfigError("task._target_ is missing: a task YAML names its class, e.g. "
+        raise ConfigError(f"{key} is missing: a task YAML names its class, e.g. "
                           "`_target_: mypackage.tasks.RingTask` (docs/extending.md)")
     module, sep, attr = target.partition(":")
     if not sep:
         module, _, attr = target.rpartition(".")
     if not module or not attr:
-        raise ConfigError(f"task._target_={target!r} is not an import path like package.module.Class")
+        raise ConfigError(f"{key}={target!r} is not an import path like package.module.Class")
     add_import_paths([p for p in os.environ.get(IMPORT_PATHS_ENV, "").split(os.pathsep) if p])  # in a worker
     try:
         mod = importlib.import_module(module)
     except (Exception, SystemExit) as e:  # ImportError, the user's module failing or calling sys.exit() at import
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
         if isinstance(e, SystemExit):  # would end the command with its code (0: "success", having done nothing)
-            msg = f"it called sys.exit({e.code!r}) while being imported; a task module must only define its task"
+            msg = f"it called sys.exit({e.code!r}) while being imported; a plugin module must only define classes"
         near = _near_module(module) if isinstance(e, ModuleNotFoundError) and e.name == module else ""
-        raise ConfigError(f"task._target_={target!r}: cannot import {module!r} ({type(e).__name__}: {msg})"
+        raise ConfigError(f"{key}={target!r}: cannot import {module!r} ({type(e).__name__}: {msg})"
                           + (near or "; is it on the Python path (the working directory, or an installed "
                                      "package)?")) from None
     if not hasattr(mod, attr):
         classes = [n for n, v in vars(mod).items() if inspect.isclass(v) and not n.startswith("_")]
         near = _did_you_mean(attr, classes, f"{module}.")
-        raise ConfigError(f"task._target_={target!r}: module {module!r} has no {attr!r}"
+        raise ConfigError(f"{key}={target!r}: module {module!r} has no {attr!r}"
                           f"{_shadowed(module, mod) or near}")
     return getattr(mod, attr)
 
@@ -116,8 +117,7 @@ def schema_of(target: str) -> type[TaskConfig]:
 
 def closest(key: str, known: Iterable[str]) -> str:
     """'; did you mean 'x'?' for the nearest known key, or ''."""
-    near = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
-    return f"; did you mean {near[0]!r}?" if near else ""
+    return did_you_mean(key, known)
 
 
 def typed_task(node: Any) -> Any:
