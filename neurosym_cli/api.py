@@ -49,11 +49,11 @@ def compose(cmd: str = "train", overrides: Mapping[str, Any] | list[str] | None 
     Bad input raises UserError with the CLI's one-line message."""
     from .commands import COMMANDS as VERBS
     from .commands.apps import compose_config
-    from .errors import UserError
+    from .errors import UserError, unknown_command
 
     name = VERBS[cmd][0] if cmd in VERBS else cmd
     if name not in COMMANDS:
-        raise UserError(f"unknown command {cmd!r}; choose one of: {', '.join(VERBS)}")
+        raise UserError(unknown_command(cmd, VERBS))
     items = list(overrides) if isinstance(overrides, list) else [f"{k}={_value(v)}" for k, v in
                                                                   {**(overrides or {})}.items()]
     items += [f"{k}={_value(v)}" for k, v in kwargs.items()]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
+from typing import Iterable
 
 
 class UserError(Exception):
@@ -26,6 +27,21 @@ def exit_status(e: BaseException) -> int:
     """The exit status of a command that stopped on ``e``: ``EXIT_CONFIG`` for a configuration error, else
     ``EXIT_FAILED`` (so that `rules=0` exits as `rules=abc` does)."""
     return EXIT_CONFIG if isinstance(e, ConfigError) else EXIT_FAILED
+
+
+def did_you_mean(word: str, known: Iterable[str]) -> str:
+    """'; did you mean 'x'?' for the nearest of ``known`` to a mistyped ``word`` (difflib's ratio >= 0.6), or ''."""
+    import difflib
+
+    near = difflib.get_close_matches(word, list(known), n=1, cutoff=0.6)
+    return f"; did you mean {near[0]!r}?" if near else ""
+
+
+def unknown_command(cmd: str, known: Iterable[str]) -> str:
+    """The one line for a command that is not one of ``known``: the nearest, then every command."""
+    known = list(known)
+    near = did_you_mean(cmd, known)
+    return f"unknown command {cut(cmd)!r}{near}{' ' if near else '; '}choose one of: {', '.join(known)}"
 
 
 def check(ok: bool, msg: str) -> None:

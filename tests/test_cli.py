@@ -145,6 +145,19 @@ def test_bad_input_is_one_clear_error(tmp_path, args, needle):
     assert "Traceback" not in p.stderr + p.stdout
 
 
+def test_a_mistyped_command_names_the_nearest_and_every_command(tmp_path):
+    import neurosym as ns
+    from neurosym_cli.commands import COMMANDS
+
+    p = run(["pipline", "task=random-grid"], tmp_path, check=False)
+    err = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(err) == 1 and not p.stdout, p.stderr
+    assert err[0].startswith("neurosym: error: unknown command 'pipline'; did you mean 'pipeline'? choose one of: ")
+    assert err[0].endswith(", ".join(COMMANDS))
+    with pytest.raises(ns.UserError, match="unknown command 'trian'; did you mean 'train'"):
+        ns.compose("trian")
+
+
 def test_corrupt_checkpoint_is_reported(tmp_path):
     ckpt = tmp_path / "random-cross/tiny/seed0/train/oracle/model.pt"
     ckpt.parent.mkdir(parents=True)
