@@ -16,7 +16,7 @@ from .degrees import OBJECTIVES
 from .errors import ConfigError, UserError, check as _check, check_finite, check_name, cut, lies_under  # noqa: F401  (UserError: re-exported for every layer)
 from .utils import compiling as _compiling, cpu as _cpu
 from .verb_config import (ExportConfig, PipelineConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig,
-                          StressConfig)
+                          StressConfig, TuneConfig)
 
 MISSING = "???"  # OmegaConf's marker for a mandatory value (kept here so this module imports nothing heavy)
 SEARCHES = ("mcmc", "hybrid")
@@ -305,6 +305,7 @@ class RunConfig:
     """render, figures: the evaluation protocol's episode (0, 1, ...: the test episodes of eval seed 0, then 1, ...)"""
     render: RenderConfig = field(default_factory=RenderConfig)
     select: SelectConfig = field(default_factory=SelectConfig)
+    tune: TuneConfig = field(default_factory=TuneConfig)
     pipeline: PipelineConfig = field(default_factory=PipelineConfig)
     report: ReportConfig = field(default_factory=ReportConfig)
     stress: StressConfig = field(default_factory=StressConfig)

@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
-from .errors import check as _check, check_finite
+from .errors import check as _check, check_finite, check_name
 
 
 def _word(value: object) -> str:
@@ -99,6 +99,75 @@ class SelectConfig:
         _check(self.jobs >= 0, f"select.jobs must be non-negative, got {self.jobs}")
 
 
+SAMPLERS = ("tpe", "cmaes")
+"""tune.sampler: Optuna's TPE (tree-structured Parzen estimator) or CMA-ES (the cmaes package; features, a
+choice, are then drawn at random)"""
+PRUNERS = ("median", "none")
+"""tune.pruner: median stops a trial before its retraining when its program's validation loss is worse than the
+median of the finished trials' (Optuna's MedianPruner); none retrains every trial"""
+
+
+def _range(values: list, key: str, low: float, example: str) -> None:
+    _check(len(values) == 2 and low <= values[0] <= values[1],
+           f"{key} must be a range [low, high] with {low:g} <= low <= high, got {list(values)}; e.g. {key}={example}")
+
+
+@dataclass
+class TuneConfig:
+    """`neurosym tune`: select's choice of (lam, K, features) and the retraining's rate by an Optuna study, resumable
+    from its storage and shared by every process that runs the same command."""
+
+    trials: int = 20
+    """the study's target of finished trials (complete or pruned, every process's together): a rerun runs the
+    missing ones, a larger value adds more, 0 only writes the table of what the study holds"""
+    sampler: str = "tpe"
+    """tpe or cmaes (SAMPLERS); seeded by seed, tune.worker and the trials the study held when it started"""
+    pruner: str = "median"
+    """median or none (PRUNERS): a trial reports its program's validation loss (before retraining) and is pruned,
+    unretrained, when it is worse than the median of the finished trials'"""
+    startup: int = 5
+    """trials drawn at random before the sampler models the study and before the pruner prunes"""
+    storage: str = ""
+    """the study's database, an SQLAlchemy URL (sqlite:///..., postgresql://...); empty: SQLite in
+    <exp_dir>/select/tune/optuna.db"""
+    study: str = ""
+    """the study's name; empty: named by the task, budget, seed, sampler and a hash of everything that sets its
+    trials (the search space and the task, budget, model, optimiser and search settings)"""
+    worker: int = 0
+    """which of the processes that share the study this is (a SLURM array's task id, a sweep's tune.worker=0,1):
+    their samplers draw apart"""
+    lam: list[float] = field(default_factory=list)
+    """[low, high] of lam, in synth.objective's units; empty: from the lowest to the highest of select's grid for
+    that objective (degrees.LAM_GRIDS)"""
+    lam_step: float = 0.05
+    """lam is drawn on this grid (programs are named by their lam, and a finer one names more of them)"""
+    rules: list[int] = field(default_factory=lambda: [2, 5])
+    """[low, high] of K"""
+    features: list[str] = field(default_factory=lambda: ["v1", "v2"])
+    """the feature maps to choose among"""
+    retrain_lr: list[float] = field(default_factory=lambda: [3e-4, 3e-3])
+    """[low, high] of optim.retrain_lr, drawn log-uniformly and run at two significant digits"""
+
+    def __post_init__(self) -> None:
+        check_finite(self, "tune.")
+        _check(self.trials >= 0, f"tune.trials must be non-negative, got {self.trials}")
+        _check(self.sampler in SAMPLERS, f"tune.sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
+        _check(self.pruner in PRUNERS, f"tune.pruner must be one of {', '.join(PRUNERS)}, got {self.pruner!r}")
+        _check(self.startup >= 0 and self.worker >= 0, "tune.startup and tune.worker must be non-negative")
+        _check(self.lam_step > 0, f"tune.lam_step must be positive, got {self.lam_step}")
+        if self.lam:
+            _range(self.lam, "tune.lam", 0.0, "[0.3,1.0]")
+        _range(self.rules, "tune.rules", 1, "[2,5]")
+        _check(bool(self.features) and all(f in ("v1", "v2") for f in self.features),
+               "tune.features must be a non-empty list of v1, v2")
+        check_once_each(self.features, "tune.features")
+        _check(len(self.retrain_lr) == 2 and 0 < self.retrain_lr[0] <= self.retrain_lr[1],
+               f"tune.retrain_lr must be a range [low, high] of rates with 0 < low <= high, got "
+               f"{list(self.retrain_lr)}; e.g. tune.retrain_lr=[3e-4,3e-3]")
+        if self.study:
+            check_name(self.study, "tune.study")  # a folder of select/tune/
+
+
 PIPELINE_SELECT = ("none", "front")
 """pipeline.select: none runs the searched program as it is; front picks among its degree-budget front"""
 
@@ -161,6 +230,13 @@ class StressConfig:
         _check(bool(self.agents or self.failure), "stress.agents and stress.failure are both empty")
 
 
+POLICY_FORMATS = ("torchscript", "pt2", "onnx")
+"""export.formats: the policy as TorchScript (policy.pt), a torch.export program (policy.pt2), ONNX (policy.onnx and
+agent/*.onnx)"""
+ONNX_EXPORTERS = ("dynamo", "legacy")
+"""export.onnx: torch.onnx.export(dynamo=True) (needs onnxscript) or the legacy TorchScript-based exporter"""
+
+
 @dataclass
 class ExportConfig:
     """`neurosym export`: a baseline's program and policy as artifacts that run without neurosym (docs/deploy.md)."""
@@ -175,9 +251,21 @@ class ExportConfig:
     """the largest absolute difference of an action component the check accepts (picks must agree exactly)"""
     dir: str = ""
     """the export folder (empty: <exp_dir>/export/<baseline label>)"""
+    formats: list[str] = field(default_factory=list)
+    """the policy's formats to write and check (POLICY_FORMATS; empty: all). A format named here that cannot be
+    written or checked (its package missing, its exporter failing) fails the command after the others are written;
+    one not named is one skipped line"""
+    onnx: str = "dynamo"
+    """the ONNX exporter (ONNX_EXPORTERS): dynamo, or legacy (TorchScript-based, deprecated upstream)"""
 
     def __post_init__(self) -> None:
         _check(self.episodes >= 1, f"export.episodes must be at least 1, got {self.episodes}")
+        bad = [f for f in self.formats if f not in POLICY_FORMATS]
+        _check(not bad, f"export.formats: unknown format {bad[0] if bad else ''!r}; choose among "
+                        f"{', '.join(POLICY_FORMATS)} (e.g. export.formats=[pt2,onnx]; empty: all)")
+        check_once_each(self.formats, "export.formats")
+        _check(self.onnx in ONNX_EXPORTERS, f"export.onnx must be one of {', '.join(ONNX_EXPORTERS)}, got "
+                                            f"{self.onnx!r}")
         check_finite(self, "export.")  # tolerance=inf would pass any action
         _check(self.tolerance > 0, f"export.tolerance must be positive, got {self.tolerance}")
 

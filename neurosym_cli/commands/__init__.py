@@ -10,6 +10,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "pipeline": ("pipeline", "every stage for every baseline (train, synth, retrain, eval), then the results table"),
     "select": ("select", "the paper's model selection: a grid of programs, validation seeds, retrained finalists, "
                          "one pick"),
+    "tune": ("tune", "select by an Optuna study over lam, K, features and the retraining rate: resumable, shared "
+                     "by many processes, pruned"),
     "stress": ("stress", "trained baselines zero-shot at other team sizes (task=swarm: up to 10,000 agents) and under link failure"),
     "rl": ("rl", "appendix D: whom to hear as actions, by policy gradient over a grid; picks rl1 and rl2"),
     "report": ("report", "one table, plots, training curves and the loss-degree Pareto front over training seeds"),
@@ -35,6 +37,7 @@ USES: dict[str, tuple[str, ...]] = {
     "pipeline": ("task", "budget", "baselines", "rules", "lam", "features", "selected", *_RUN, "overwrite", "logger",
                  "plots", "model", "optim", "synth", "select", "rl", "render", "pipeline"),
     "select": ("task", "budget", *_RUN, "overwrite", "logger", "select", "synth", "optim"),
+    "tune": ("task", "budget", *_RUN, "overwrite", "logger", "tune", "synth", "optim"),
     "stress": ("task", "budget", "rules", "lam", "features", "selected", *_RUN, "plots", "stress", "synth"),
     "rl": ("task", "budget", *_RUN, "overwrite", "logger", "plots", "rl", "model", "optim"),
     "report": ("task=", "budget=", "report_dir", "runs_root", "plots", "report"),

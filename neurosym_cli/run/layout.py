@@ -12,6 +12,7 @@ composes them into paths, the schemes never do.
     <exp_dir>/pipeline_timings.json       each stage's wall time (`neurosym pipeline`)
     <exp_dir>/select/                     selected.json, selection.json/.csv, val/<label>.json (`neurosym select`)
     <exp_dir>/select/front/               <tag>.json, <tag>-b<budget>.txt (pipeline.select=front)
+    <exp_dir>/select/tune/                optuna.db, <study>/selection.json/.csv, pareto.csv/.png (`neurosym tune`)
     <exp_dir>/rl/                         picks.json, grid.json/.csv (`neurosym rl`)
     <exp_dir>/stress/                     stress.json/.csv/.png (`neurosym stress`)
     <exp_dir>/export/<baseline label>/    an export folder, its record manifest.json (`neurosym export`)
@@ -60,6 +61,8 @@ SELECTED, SELECTION, VAL = "selected.json", "selection", "val"
 """select/: the choice, the whole selection (.json, .csv), and the validation rows per label (val/<label>.json)"""
 FRONT_SELECT = "front"
 """select/front/: the pipeline's choice among a search's degree-budget front and its candidates' program files"""
+TUNE, TUNE_DB = "tune", "optuna.db"
+"""select/tune/: `neurosym tune`'s default study storage (SQLite) and one folder per study (its table and front)"""
 PICKS, GRID = "picks.json", "grid"
 """rl/: the picks rl1 and rl2, and every setting (.json, .csv)"""
 TIMINGS = "pipeline_timings.json"
@@ -208,6 +211,15 @@ class _Folder:
         """select/front/<tag>-b<budget>.txt: the program of one budget of search <tag>'s front, run as program=
         (its evaluation label and retrained model are named by its content, schemes/searched.user_program_tag)."""
         return self.select_dir / FRONT_SELECT / f"{tag}-b{budget:g}.txt"
+
+    @property
+    def tune_db(self) -> Path:
+        """select/tune/optuna.db: the SQLite file of `neurosym tune`'s studies when tune.storage names none."""
+        return self.select_dir / TUNE / TUNE_DB
+
+    def study_dir(self, study: str) -> Path:
+        """select/tune/<study>/: one study's selection.json/.csv and pareto.csv/.png (`neurosym tune`)."""
+        return self.select_dir / TUNE / study
 
     @property
     def rl_dir(self) -> Path:

@@ -102,12 +102,30 @@ class OwnRule(OwnModel, CommBase):
         return self.mask(ctx, round)
 
 
+def rate_suffix(cfg: "RunConfig") -> str:
+    """'-rlr<rate>' when a retraining starts at another rate than optim.retrain_lr's default (`neurosym tune`
+    searches the rate), else '': models retrained at two rates never share a directory, label or validation file,
+    and the default's names are those of every earlier run."""
+    from ..config import OptimConfig
+
+    lr = cfg.optim.retrain_lr
+    return "" if lr == OptimConfig.retrain_lr else f"-rlr{lr:g}"
+
+
 class Retrained:
     """Mixin for the oracle retrained under a synthesized artifact (`neurosym retrain`, paper section 3.5): put it
-    before the artifact's scheme class. Its weights live in train/retrained-<artifact tag>/."""
+    before the artifact's scheme class. Its weights live in train/retrained-<artifact tag>[-rlr<rate>]/."""
 
     def model_dir(self, cfg: "RunConfig") -> str:
-        return f"retrained-{self.artifact(cfg).tag}"  # type: ignore[attr-defined]
+        return f"retrained-{self.artifact(cfg).tag}{rate_suffix(cfg)}"  # type: ignore[attr-defined]
+
+    def label(self, cfg: "RunConfig") -> str:
+        return super().label(cfg) + rate_suffix(cfg)  # type: ignore[misc]
+
+    def command(self, verb: str, cfg: "RunConfig") -> str:
+        line = super().command(verb, cfg)  # type: ignore[misc]
+        return line + (f" optim.retrain_lr={cfg.optim.retrain_lr:g}" if verb == "retrain" and rate_suffix(cfg)
+                       else "")
 
     def weights(self) -> Stage:
         return Stage("retrain", self.name)  # type: ignore[attr-defined]

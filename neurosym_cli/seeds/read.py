@@ -37,8 +37,9 @@ PAIRS = ("tf-full", "dist", "no-comm", "expo")
 
 IGNORED = ("cmd", "seed", "exp_dir", "runs_root", "report_dir", "report", "device", "threads", "progress", "plots",
            "logger", "overwrite", "baselines", "episode", "render", "stress", "select.jobs", "rl.jobs", "selected",
-           "baseline", "program_file")
-"""config keys (and prefixes) that do not change a result, or that name the baseline rather than the run"""
+           "baseline", "program_file", "tune")
+"""config keys (and prefixes) that do not change a result, or that name the baseline rather than the run (tune: the
+settings of `neurosym tune`, which evaluates nothing on the test seeds; records before it lack them)"""
 
 PICKED = ("rules", "lam", "features", "synth")
 """what `neurosym select` chooses per training seed (K, lambda, features, search settings): allowed to differ"""

@@ -194,23 +194,26 @@ def _table_rows(first: list[dict], final: list[dict]) -> list[dict[str, Any]]:
     return rows
 
 
-def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -> None:
-    """The ranked table on screen (rich), the pick marked, then the pick's test numbers."""
+def print_selection(rows: list[dict], cfg: RunConfig, picked: str | None, test: dict | None) -> None:
+    """The ranked table on screen (rich), the pick marked, then the pick's test numbers (``test`` None: none were
+    played, as in `neurosym tune`). Rows with a ``retrain_lr`` (tune's) show it beside the features."""
     from rich.table import Table
 
     from ..utils.console import console
 
+    rate = bool(rows) and "retrain_lr" in rows[0]
     t = Table(title=f"selection by validation: {cfg.task.name}, {cfg.budget.val_seeds} validation seeds "
                     f"(prog = oracle under the program; finalists retrained); ± = 95 % Student-t interval over the "
                     "validation seeds (Δ best: paired)", header_style="bold")
-    for c in ("#", "lam", "K", "feat", "objective", "val loss ± CI", "Δ best ± CI", "max in", "max out",
-              "max in+out", "retrained val loss", "ret. max in+out", ""):
+    for c in ("#", "lam", "K", "feat", *(("retrain lr",) if rate else ()), "objective", "val loss ± CI",
+              "Δ best ± CI", "max in", "max out", "max in+out", "retrained val loss", "ret. max in+out", ""):
         t.add_column(c, justify="left" if c in ("feat", "") else "right")
     for r in rows:
         ret = "-" if r["retrained_val_loss"] is None else \
             f"{r['retrained_val_loss']:.3f} ± {r['retrained_val_loss_ci']:.3f}" + \
             ("" if r["retrained_similar"] else " (worse)")
-        t.add_row(str(r["rank"]), f"{r['lam']:g}", str(r["rules"]), r["features"], f"{r['objective']:.3f}",
+        t.add_row(str(r["rank"]), f"{r['lam']:g}", str(r["rules"]), r["features"],
+                  *((f"{r['retrain_lr']:g}",) if rate else ()), f"{r['objective']:.3f}",
                   f"{r['val_loss']:.3f} ± {r['val_loss_ci']:.3f}", f"{r['diff_to_best']:+.3f} ± {r['diff_ci']:.3f}"
                   + ("" if r["similar"] else " *"), f"{r['max_in']:.2f}", f"{r['max_out']:.2f}",
                   f"{r['max_degree']:.2f}", ret,
@@ -221,6 +224,8 @@ def print_selection(rows: list[dict], cfg: RunConfig, picked: str, test: dict) -
                   "(similar to the best, lowest max in+out first), the pick is the lowest max in+out whose retrained "
                   "validation loss is similar to the best retrained one.")
     console.print(LEGEND)
+    if test is None:
+        return
     pr = test["prog-retrained"]
     console.print(f"test ({cfg.budget.eval_seeds} seeds; ± = 95 % t-interval over the evaluation seeds of this "
                   f"one model) of {picked}: prog-retrained loss "

@@ -23,9 +23,14 @@ except ImportError:  # pragma: no cover - not on Linux or macOS: no locking, as 
     fcntl = None  # type: ignore[assignment]
 
 
+class Busy(ArtifactError):
+    """Another process holds the directory's lock: it is writing there now (a rerun after it ends resumes or reuses
+    its result; `neurosym tune` waits for it)."""
+
+
 @contextmanager
 def run_lock(directory: Path) -> Iterator[None]:
-    """Hold ``directory``'s lock for the duration of the block (ArtifactError when another process holds it)."""
+    """Hold ``directory``'s lock for the duration of the block (``Busy`` when another process holds it)."""
     directory = Path(directory)
     check_inside(directory)
     made = [d for d in (directory, *directory.parents) if not d.exists()]  # deepest first
@@ -46,7 +51,7 @@ def run_lock(directory: Path) -> Iterator[None]:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 holder = os.pread(fd, 512, 0).decode(errors="replace").strip() or "another process"
-                raise ArtifactError(f"{directory} is being written by {holder}; wait for it to finish (a rerun "
+                raise Busy(f"{directory} is being written by {holder}; wait for it to finish (a rerun "
                                     f"then resumes or reuses its result), or write elsewhere with runs_root=...") from None
         held = True
         os.ftruncate(fd, 0)
