@@ -26,7 +26,7 @@ from .config import RunConfig
 from .dsl.ast import Program
 from .stages import RunInfo
 
-COMMANDS = ("train", "synth", "retrain", "eval", "pipeline", "select", "show_program", "stress", "rl", "render",
+COMMANDS = ("train", "synth", "retrain", "eval", "pipeline", "select", "tune", "show_program", "stress", "rl", "render",
             "figures", "report", "export")
 
 
@@ -106,13 +106,36 @@ def _selected(cfg: RunConfig) -> RunConfig:
     return cfg
 
 
+TRAINED = ("checkpoint", "steps", "rollouts", "loss", "seconds")
+"""the keys of what train and retrain return (_trained)"""
+
+
+def _trained(cfg: RunConfig, remake: str) -> dict:
+    """What train and retrain return, read from the model's manifest.json (also when it was trained before):
+    checkpoint (str, the model.pt path), steps (optimizer steps), rollouts (training rollouts), loss (the final
+    training loss: mean of the last steps, up to 5) and seconds (training time of the run that finished it);
+    ``remake``: the command that writes the manifest again."""
+    from .run import RunDir
+    from .utils.io import read_json
+
+    m = read_json(RunDir(cfg).manifest_file, remake,
+                  lambda m: isinstance(m, dict) and all(k in m for k in ("checkpoint", "steps", "rollouts",
+                                                                         "final_loss", "seconds_this_run")))
+    return dict(zip(TRAINED, (m["checkpoint"], m["steps"], m["rollouts"], m["final_loss"], m["seconds_this_run"])))
+
+
 def train(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> dict:
     """Train the oracle (``cfg.baseline``, tf-full by default) or a baseline's own model (dist, no-comm, rl);
-    resumes an interrupted run. Returns the manifest: checkpoint path, final loss, rollouts, seconds."""
+    resumes an interrupted run, and a trained model is kept. Returns {checkpoint: the model.pt path, steps:
+    optimizer steps, rollouts: training rollouts, loss: final training loss (mean of the last steps, up to 5),
+    seconds: training time of the run that finished it} (``TRAINED``, from its manifest.json)."""
+    from .run import train_command
     from .stages.train import train as run
 
+    c = _with(_selected(cfg), "train", baseline)
     with _quiet(verbose):
-        return run(_with(_selected(cfg), "train", baseline), RunInfo(multirun=not verbose))
+        run(c, RunInfo(multirun=not verbose))
+    return _trained(c, train_command(c))
 
 
 def synth(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> Program | None:
@@ -129,11 +152,15 @@ def synth(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) ->
 
 
 def retrain(cfg: RunConfig, baseline: str = "prog-retrained", verbose: bool = False) -> dict:
-    """Retrain the oracle under the program (or tree) of ``cfg`` (paper section 3.5). Returns the manifest."""
+    """Retrain the oracle under the program (or tree) of ``cfg`` (paper section 3.5). Returns what ``train``
+    returns, for the retrained model."""
+    from .run import retrain_command
     from .stages.train import retrain as run
 
+    c = _with(_selected(cfg), "retrain", baseline)
     with _quiet(verbose):
-        return run(_with(_selected(cfg), "retrain", baseline), RunInfo(multirun=not verbose))
+        run(c, RunInfo(multirun=not verbose))
+    return _trained(c, retrain_command(c))
 
 
 def evaluate(cfg: RunConfig, baseline: str | None = None, verbose: bool = False) -> dict:
@@ -154,9 +181,10 @@ def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
 
 
 def export(cfg: RunConfig, baseline: str | None = None, check: bool = False, verbose: bool = False) -> dict:
-    """`neurosym export`: the baseline's program (JSON, Python, C), policy (TorchScript, ONNX) and golden vectors
-    into <exp_dir>/export/<label>/ (``cfg.export.dir``); ``check=True`` replays an export in a process without
-    neurosym and raises UserError naming the first mismatch. Returns what was written, or the check's report."""
+    """`neurosym export`: the baseline's program (JSON, Python, C), policy (TorchScript, .pt2, ONNX: export.formats)
+    and golden vectors into <exp_dir>/export/<label>/ (``cfg.export.dir``); ``check=True`` replays an export in a
+    process without neurosym and raises UserError naming the first mismatch. Returns what was written, or the
+    check's report."""
     from .stages.export import export as run
 
     c = _with(cfg, "export", baseline)
