@@ -221,6 +221,10 @@ class _Folder:
         """select/tune/<study>/: one study's selection.json/.csv and pareto.csv/.png (`neurosym tune`)."""
         return self.select_dir / TUNE / study
 
+    def study_file(self, study: str, suffix: str = ".json") -> Path:
+        """select/tune/<study>/selection.json (or .csv): the study's trials as select's table, and its pick."""
+        return self.study_dir(study) / (SELECTION + suffix)
+
     @property
     def rl_dir(self) -> Path:
         return self.root / RL

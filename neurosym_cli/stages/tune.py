@@ -30,6 +30,7 @@ from ..baselines import run_args
 from ..config import ConfigError, RunConfig, UserError
 from ..degrees import LAM_GRIDS
 from ..run import RunDir
+from ..run.layout import fail_suffix
 from ..schemes import get
 from ..schemes.families import rate_suffix
 from ..schemes.searched import SEARCH_KEYS, search_variants
@@ -106,7 +107,8 @@ def study_name(cfg: RunConfig) -> str:
     if cfg.tune.study:
         return cfg.tune.study
     digest = hashlib.sha1(json.dumps(study_key(cfg), sort_keys=True).encode()).hexdigest()[:10]
-    return f"{RunDir(cfg).root.parent.parent.name}-{cfg.budget.name}-seed{cfg.seed}-{cfg.tune.sampler}-{digest}"
+    task = cfg.task.name + fail_suffix(cfg.task.link_failure)  # as its run directory's task folder
+    return f"{task}-{cfg.budget.name}-seed{cfg.seed}-{cfg.tune.sampler}-{digest}"
 
 
 def storage_url(cfg: RunConfig) -> str:
@@ -338,8 +340,8 @@ def write_study(optuna, study, cfg: RunConfig, name: str, url: str, ran: int, se
               "synth": {k: getattr(cfg.synth, k) for k in SEARCH_KEYS}, "val_seeds": cfg.budget.val_seeds,
               "programs": first, "retrained": final, "seconds_here": seconds, "runtime": runtime(),
               "config": cfg.record()}
-    write_csv(out / "selection.csv", table)
-    write_json(out / "selection.json", record)
+    write_csv(RunDir(cfg).study_file(name, ".csv"), table)
+    write_json(RunDir(cfg).study_file(name), record)
     points = {m["labels"]["prog"]: (first_row["degree"], first_row["loss_mean"])
               for first_row in first for m in [meta[first_row["name"]]]}
     points.update({meta[r["name"]]["labels"]["retrained"]: (r["degree"], r["loss_mean"]) for r in final})
