@@ -14,7 +14,7 @@ from typing import Any, Optional
 from .baselines import BaselineConfig
 from .degrees import OBJECTIVES
 from .errors import ConfigError, UserError, check as _check, check_finite, check_name, cut, lies_under  # noqa: F401  (UserError: re-exported for every layer)
-from .utils import compiling as _compiling, cpu as _cpu
+from .utils import compiling as _compiling, cpu as _cpu, tracking as _tracking
 from .verb_config import (ExportConfig, PipelineConfig, RenderConfig, ReportConfig, RLConfig, SelectConfig,
                           StressConfig, TuneConfig)
 
@@ -257,8 +257,10 @@ class RunConfig:
     """report: a directory to aggregate (empty: <runs_root>/<task>/<budget>)"""
     device: str = "auto"
     """auto (GPU when present), cpu, cuda"""
-    threads: int = 0
-    """torch CPU threads; 0 keeps torch's default"""
+    threads: int = 1
+    """torch CPU threads; 0 keeps torch's default (the cores). 1 by default: a rollout's kernels are too small to
+    split (faster than 2 threads on 2 idle cores), it does not collapse beside other busy processes, and its numbers
+    do not depend on the machine's core count (benchmarks/bench_contention.py; docs/performance.md)"""
     cpu_kernels: str = "avx2"
     """which CPU kernels torch and MKL run, fixed before torch loads (utils/cpu.py): avx2 pins them to the AVX2
     code paths (ATEN_CPU_CAPABILITY=avx2, MKL_CBWR=AVX2, ONEDNN_MAX_CPU_ISA=AVX2) and gives every CPU vendor MKL's
@@ -289,8 +291,10 @@ class RunConfig:
     """eval, pipeline, report, stress: draw their PNG figures (false: tables, CSV and JSON only; quicker sweeps).
     `neurosym render` and `neurosym figures` always draw"""
     logger: str = "csv"
-    """run tracking: csv (history.csv, trace.csv: always written) or tensorboard (also event files under
-    <exp_dir>/tensorboard; the tensorboard extra)"""
+    """run tracking (utils/tracking.py): csv (history.csv, trace.csv: always written), tensorboard (also event files
+    under <exp_dir>/tensorboard), mlflow (an MLflow run per stage: MLFLOW_TRACKING_URI's store, else SQLite under
+    <runs_root>/mlflow), wandb (a W&B run per stage, offline under <runs_root>/wandb without an API key); several
+    joined by + (tensorboard+mlflow); each but csv needs its extra"""
     baselines: list[str] = field(default_factory=list)
     """pipeline: the baselines to make and evaluate, in order. Composed, it defaults to every scheme of
     schemes.SCHEMES made by the pipeline by default, in the paper's order (commands/apps.py fills it in)"""
@@ -334,7 +338,7 @@ class RunConfig:
         _check(self.cpu_kernels in _cpu.CHOICES, _cpu.check(self.cpu_kernels) or "")
         _check(self.compile in _compiling.CHOICES, _compiling.check(self.compile) or "")
         _check(self.episode >= 0, f"episode must be >= 0, got {self.episode}")
-        _check(self.logger in ("csv", "tensorboard"), f"logger must be csv or tensorboard, got {self.logger!r}")
+        _check(_tracking.logger_problem(self.logger) is None, _tracking.logger_problem(self.logger) or "")
         cpus = os.cpu_count() or 1
         _check(self.threads <= cpus, f"threads={self.threads}, but this machine has {cpus} CPU(s)")
         if isinstance(self.task, TaskConfig):  # RunConfig() from Python holds a bare dict: no task composed yet

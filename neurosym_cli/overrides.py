@@ -47,6 +47,42 @@ def known_keys(task_schemas: list[type] | None = None) -> dict[str, str]:
 _KINDS = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a text"}
 
 
+@dataclasses.dataclass(frozen=True)
+class NumberKind:
+    """A numeric type of the schemas (int, float): which ASCII words it reads, and how its hints name it."""
+
+    name: str
+    many: str
+    """the plural in a hint: integers, numbers"""
+    fractional: bool
+    """a fraction part is allowed (½, 0,5, 0.5)"""
+    example: str
+    examples: str
+
+    @property
+    def one(self) -> str:
+        return _KINDS[self.name]
+
+    @property
+    def how(self) -> str:
+        return "ASCII digits" + (" and '.' for the decimal point" if self.fractional else "")
+
+    def reads(self, word: str) -> bool:
+        """Whether the ASCII ``word`` is a value of this kind as a config reads it."""
+        if not self.fractional:
+            return _INT.fullmatch(word) is not None
+        try:
+            float(word.replace("_", ""))
+        except ValueError:
+            return False
+        return True
+
+
+NUMBERS = {k.name: k for k in (NumberKind("int", "integers", False, "1", "[1,2]"),
+                               NumberKind("float", "numbers", True, "0.5", "[0.3,0.5]"))}
+"""the schemas' numeric type names -> their kinds"""
+
+
 def _unquote(value: str) -> str:
     return value[1:-1] if len(value) > 1 and value[0] == value[-1] and value[0] in "'\"" else value
 
@@ -66,13 +102,8 @@ def _type_error(value: str, typ: str) -> str | None:
         return f"one value ({_KINDS[typ]}), not a list; -m key=a,b sweeps over values"
     for part in value.split(",") if value[:1] not in "'\"" else [value]:  # a sweep: seed=0,1,2
         part = _unquote(part.strip())
-        if typ == "int" and not _INT.fullmatch(part):
+        if typ in NUMBERS and not NUMBERS[typ].reads(part):
             return _KINDS[typ]
-        if typ == "float":
-            try:
-                float(part.replace("_", ""))
-            except ValueError:
-                return _KINDS[typ]
         if typ == "bool" and part.lower() not in _BOOL:
             return _KINDS[typ]
     return None
@@ -81,16 +112,16 @@ def _type_error(value: str, typ: str) -> str | None:
 _DECIMAL_COMMA = re.compile(r"[+-]?[0-9]+,[0-9]+")
 
 
-def _ascii_number(text: str, kind: str) -> str | None:
-    """``text``, a number of ``kind`` (int or float) written with other scripts' digits, fullwidth forms
-    (``０.５``), a vulgar fraction (``½``, ``1½``) or a decimal comma (``0,5``), in the ASCII a config reads; None
-    when it is no such number."""
+def _ascii_number(text: str, kind: NumberKind) -> str | None:
+    """``text``, a number of ``kind`` written with other scripts' digits, fullwidth forms (``０.５``), a vulgar
+    fraction (``½``, ``1½``) or a decimal comma (``0,5``), in the ASCII a config reads; None when it is no such
+    number."""
     text = text.strip()
     last = text[-1:]
     frac = unicodedata.numeric(last, None) if last and not last.isascii() else None
     if frac is not None and frac % 1:  # a vulgar fraction, after an optional whole part
-        whole = _ascii_number(text[:-1], "int") if text[:-1] else "0"
-        if whole is None or kind == "int":
+        whole = _ascii_number(text[:-1], NUMBERS["int"]) if text[:-1] else "0"
+        if whole is None or not kind.fractional:
             return None
         return f"{'-' if whole.startswith('-') else ''}{abs(int(whole)) + frac:g}"
     out = []
@@ -99,13 +130,9 @@ def _ascii_number(text: str, kind: str) -> str | None:
         out.append(ch if ch.isascii() else str(digit) if digit is not None else "-" if ch in "\u2212\u2013"
                    else "." if ch == "\u066b" else "?")  # the minus signs; the Arabic decimal separator
     word = "".join(out)
-    if kind == "float" and _DECIMAL_COMMA.fullmatch(word):
+    if kind.fractional and _DECIMAL_COMMA.fullmatch(word):
         word = word.replace(",", ".")
-    if kind == "int":
-        return word if _INT.fullmatch(word) else None
-    try:
-        float(word)
-    except ValueError:
+    if not kind.reads(word):
         return None
     return word if word.isascii() and word.lower().lstrip("+-") not in ("inf", "nan", "infinity") else None
 
@@ -117,21 +144,19 @@ def number_hint(key: str, value: str, keys: dict[str, str]) -> str | None:
     typ = keys.get(key, "")
     typ = typ.removeprefix("Optional[").removesuffix("]") if typ.startswith("Optional[") else typ
     listed = typ.startswith("list[") and value.startswith("[") and value.endswith("]")
-    kind = typ[5:-1] if listed else typ
-    if kind not in ("int", "float"):
+    kind = NUMBERS.get(typ[5:-1] if listed else typ)
+    if kind is None:
         return None
     value = _unquote(value)
     parts = [p.strip() for p in value[1:-1].split(",")] if listed else [value]
-    decimal_comma = not listed and kind == "float" and _DECIMAL_COMMA.fullmatch(value) is not None
+    decimal_comma = not listed and kind.fractional and _DECIMAL_COMMA.fullmatch(value) is not None
     if all(p.isascii() for p in parts) and not decimal_comma:
         return None
     fixed = [_ascii_number(p, kind) for p in parts]
     fix = None if None in fixed else f"[{','.join(fixed)}]" if listed else fixed[0]  # type: ignore[arg-type]
-    what = ("integers" if kind == "int" else "numbers") if listed else _KINDS[kind]
-    how = "ASCII digits" + ("" if kind == "int" else " and '.' for the decimal point")
-    return (f"{key} takes {'a list of ' if listed else ''}{what} written in {how}, not {cut(repr(value))}"
-            + (f"; write {key}={fix}" if fix else f"; e.g. {key}={'[1,2]' if listed else 1}"
-               if kind == "int" else f"; e.g. {key}={'[0.3,0.5]' if listed else 0.5}"))
+    what = kind.many if listed else kind.one
+    return (f"{key} takes {'a list of ' if listed else ''}{what} written in {kind.how}, not {cut(repr(value))}"
+            + (f"; write {key}={fix}" if fix else f"; e.g. {key}={kind.examples if listed else kind.example}"))
 
 
 _INTERPOLATION = re.compile(r"\$\{([^${}]*)\}")  # the innermost ${...} of a value
@@ -196,6 +221,9 @@ def check(args: list[str], task_schemas: list[type] | None = None) -> str | None
         if value == "null" and not optional and typ != "group" and not a.startswith("~"):
             kind = _KINDS.get(typ, "a list [a,b]" if typ.startswith("list[") else "a value")
             return f"{a}: {key} cannot be null; it takes {kind}" + (f" (an empty one: {key}='')" if typ == "str" else "")
+        if typ == "str" and value.startswith("[") and value.endswith("]"):  # Hydra's "Error merging override"
+            return (f"{cut(a)}: {key} takes one value, not a list"
+                    + ("; join trackers by + (logger=tensorboard+mlflow)" if key == "logger" else ""))
         if typ in ("int", "float", "bool") or typ.startswith("list["):
             why = _type_error(value, typ)
             if why:

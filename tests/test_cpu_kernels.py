@@ -360,3 +360,27 @@ def test_an_emulated_amd_cpu_trains_the_weights_of_this_one(tmp_path):
     assert all(torch.equal(here[k], amd[k]) for k in here), "avx2 on an emulated AMD CPU trained other weights"
     vendor, _ = weights(tmp_path / "amd-vendor", "avx2-vendor", True)
     assert not all(torch.equal(here[k], vendor[k]) for k in here), "MKL's AMD path gave Intel's weights"
+
+
+@pytest.mark.parametrize("users, want", [(None, "PASSIVE"), ("ACTIVE", "ACTIVE")])
+def test_idle_openmp_threads_sleep_unless_the_user_says_otherwise(tmp_path, users, want):
+    """Issue 39: spinning OpenMP threads collapse training beside other busy processes, so importing neurosym sets
+    OMP_WAIT_POLICY=PASSIVE before torch loads; a user's own value stays, and children inherit it."""
+    env = {k: v for k, v in clean_env(tmp_path).items() if k != "OMP_WAIT_POLICY"}
+    if users:
+        env["OMP_WAIT_POLICY"] = users
+    p = python("""
+        import os, subprocess, sys
+        import neurosym_cli
+        child = subprocess.run([sys.executable, "-c", "import os; print(os.environ['OMP_WAIT_POLICY'])"],
+                               capture_output=True, text=True).stdout.strip()
+        print(os.environ["OMP_WAIT_POLICY"], child)
+        """, tmp_path, env=env)
+    assert p.returncode == 0 and p.stdout.split() == [want, want], p.stderr
+
+
+def test_one_thread_is_the_default():
+    """Issue 39: threads=1 by default (the same numbers on every core count; no collapse under contention)."""
+    from neurosym_cli.config import RunConfig
+
+    assert RunConfig().threads == 1

@@ -36,6 +36,9 @@ SHIM = "_mkl_intel_path"
 """the compiled library (utils/mkl_intel_path.c, built by setup.py) that gives every vendor MKL's Intel path: MKL's
 vector math (exp, log, sqrt) runs other code on AMD than on Intel even with MKL_CBWR=AVX2"""
 
+WAIT_POLICY = "PASSIVE"
+"""OMP_WAIT_POLICY set before torch loads unless the user set one (GNU OpenMP reads it when it starts)"""
+
 MARK = "NEUROSYM_PINNED"
 """the variables of PIN that neurosym set (comma-separated), so that native in a child of a pinned process undoes
 them while a user's own settings stay"""
@@ -179,6 +182,10 @@ def apply(mode: str | None = None) -> str | None:
     if mode not in CHOICES:
         return None
     os.environ[ENV] = mode  # children (joblib, process pools, submitit) read it in their own import neurosym_cli
+    # OpenMP threads that wait for each other sleep instead of spinning: on a shared machine a spinning team takes
+    # the cores the other processes need (issue 39: training 2.4x slower beside 3 busy processes at threads=2;
+    # benchmarks/bench_contention.py). It moves no number (the work is split the same way); a user's setting stays.
+    os.environ.setdefault("OMP_WAIT_POLICY", WAIT_POLICY)
     if "torch" in sys.modules:
         if _state["mode"] == mode:
             return None
