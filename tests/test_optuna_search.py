@@ -136,7 +136,12 @@ def test_a_missing_optuna_or_a_bad_storage_is_one_line(tmp_path, monkeypatch):
         with pytest.raises(UserError, match=r"needs the tune extra: pip install -e '\.\[tune\]'"):
             run_tune(_cfg(tmp_path), RunInfo())  # before any missing oracle is reported
     optuna = _optuna()
-    from neurosym_cli.stages.tune import open_storage
+    from neurosym_cli.stages.tune import open_storage, open_study
+
+    with monkeypatch.context() as m:
+        m.setitem(sys.modules, "cmaes", None)  # CMA-ES would fail only at its first modelled draw
+        with pytest.raises(UserError, match=r"tune.sampler=cmaes needs the cmaes package: .*\.\[tune\]"):
+            open_study(optuna, _cfg(tmp_path, "tune.sampler=cmaes"))
 
     with pytest.raises(UserError, match=r"tune.storage=nosuchdb://host/x cannot be opened"):
         open_storage(optuna, "nosuchdb://host/x")

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib
 import json
 import time
 import warnings
@@ -162,6 +163,8 @@ SAMPLERS: dict[str, Callable] = {
                                                         warn_independent_sampling=False),
 }
 """tune.sampler -> (optuna, seed, startup trials) -> the sampler (verb_config.SAMPLERS names them)"""
+NEEDS = {"cmaes": "cmaes"}
+"""tune.sampler -> the package it imports only when it first models the study (checked before any trial)"""
 PRUNERS: dict[str, Callable] = {
     "median": lambda o, n: o.pruners.MedianPruner(n_startup_trials=n, n_warmup_steps=0),
     "none": lambda o, n: o.pruners.NopPruner(),
@@ -175,12 +178,15 @@ def open_study(optuna, cfg: RunConfig):
     url, name = storage_url(cfg), study_name(cfg)
     storage = open_storage(optuna, url)
     key = json.loads(json.dumps(study_key(cfg)))
+    need = NEEDS.get(cfg.tune.sampler)
     try:
-        sampler = SAMPLERS[cfg.tune.sampler](optuna, 0, cfg.tune.startup)  # reseeded below, once the study is read
+        if need:
+            importlib.import_module(need)
     except ImportError:
-        raise UserError(f"tune.sampler=cmaes needs the cmaes package: {EXTRA}") from None
+        raise UserError(f"tune.sampler={cfg.tune.sampler} needs the {need} package: {EXTRA}") from None
     study = optuna.create_study(storage=storage, study_name=name, direction="minimize", load_if_exists=True,
-                                sampler=sampler, pruner=PRUNERS[cfg.tune.pruner](optuna, cfg.tune.startup))
+                                sampler=SAMPLERS[cfg.tune.sampler](optuna, 0, cfg.tune.startup),  # reseeded below
+                                pruner=PRUNERS[cfg.tune.pruner](optuna, cfg.tune.startup))
     old = study.user_attrs.get("key")
     if old is None:
         study.set_user_attr("key", key)
