@@ -22,13 +22,40 @@ METRICS = ("cost", "max_in", "max_out", "max_degree", "mean_degree")
 """the metrics of every task and baseline, in every evaluation (rollout.py computes them; a task adds its own,
 ``Task.metrics``)"""
 
-NAMES = {"max_in": "max in", "max_out": "max out", "max_degree": "max in+out", "mean_degree": "mean in+out"}
+BANDWIDTH = ("bits", "link_share")
+"""what the degrees cost in messages, in every evaluation since issue 40 (rollout.py computes them beside the
+degrees); a record written before lacks them and reads without them (its tables show '-')
+
+    bits         messages agent i hears in a step (every round) x message width D x FLOAT_BITS, mean over agents
+    link_share   links used / N (N - 1) possible directed links, per round, mean over rounds
+
+Both follow from mean in+out: an agent hears as many messages as it sends on average, links / N per round, so
+bits = rounds x (mean in+out / 2) x D x 32 and link_share = mean in+out / (2 (N - 1)) (0 for one agent)."""
+
+FLOAT_BITS = 32
+"""bits of one float of a message (float32)"""
+
+NAMES = {"max_in": "max in", "max_out": "max out", "max_degree": "max in+out", "mean_degree": "mean in+out",
+         "bits": "bits/agent/step", "link_share": "link share"}
 """metric key -> its word (table headers, log lines, axis labels)"""
 
 LEGEND = ("max in / max out: the most agents one agent hears / is heard by; max in+out: the most of one agent's "
           "in + out (the paper's deg); mean in+out: in + out averaged over agents; each per step, averaged over "
           "the episode")
 """the one line under every table that shows degrees"""
+
+BANDWIDTH_LEGEND = ("bits/agent/step: messages one agent hears per step, every round, x the message width D x 32 "
+                    "(float32); link share: directed links used / N (N - 1) possible; each averaged over agents and "
+                    "steps")
+"""the line under every table that shows bits and link share"""
+
+
+def bandwidth(mean_degree, *, agents: int, rounds: int, width: int):
+    """(bits, link_share) from mean in+out averaged over ``rounds`` rounds among ``agents`` agents, messages of
+    ``width`` floats (see BANDWIDTH); works on numbers and on tensors alike."""
+    heard = mean_degree / 2  # mean over agents of the in-degree: links / N
+    share = mean_degree / (2 * (agents - 1)) if agents > 1 else mean_degree * 0
+    return heard * rounds * width * FLOAT_BITS, share
 
 
 @dataclass(frozen=True)

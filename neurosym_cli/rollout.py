@@ -10,7 +10,7 @@ from torch import Tensor
 from .tasks.base import TaskState, Task, Rng
 from .policy.comm import CommProvider
 from .policy.transformer import CommTransformer, Heard
-from .degrees import METRICS
+from .degrees import BANDWIDTH, METRICS, bandwidth
 from .step import Recorder, step
 
 
@@ -26,11 +26,14 @@ class Trajectory:
     task_metrics: dict[str, Tensor] = field(default_factory=dict)  # name -> (T, B): the task's own (Task.metrics)
     logp: Tensor | None = None  # (T, B) log-probability of the step's communication decisions (rl, with grad)
     comm_degree: Tensor | None = None  # (T, B) the degree those decisions cost (rl, with grad)
+    bits: Tensor | None = None  # (T, B) bits one agent hears per step, mean over agents (degrees.BANDWIDTH)
+    link_share: Tensor | None = None  # (T, B) links used / N (N - 1), mean over rounds
 
     def episode_metrics(self) -> dict[str, Tensor]:
         """(B,) time averages: the per-episode metrics of the evaluation protocol (docs/fidelity.md): the loss and
-        degrees of every task, then the task's own metrics (collisions for the paper's tasks)."""
+        degrees of every task, their bandwidth, then the task's own metrics (collisions for the paper's tasks)."""
         out = {k: getattr(self, k).detach().float().mean(0) for k in METRICS}
+        out.update({k: getattr(self, k).detach().float().mean(0) for k in BANDWIDTH if getattr(self, k) is not None})
         out.update({k: v.detach().float().mean(0) for k, v in self.task_metrics.items()})
         return out
 
@@ -94,5 +97,6 @@ def rollout(
         zero = torch.zeros_like(cost.detach())
         return Trajectory(cost, zero, zero, zero, zero, {}, logp, comm_degree)
     s = torch.stack(records)  # (T, 4, B)
+    bits, share = bandwidth(s[:, 3], agents=state.n_agents, rounds=len(out.heard), width=policy.message_dim)
     return Trajectory(cost, s[:, 0], s[:, 1], s[:, 2], s[:, 3], {k: torch.stack(v) for k, v in extra.items()}, logp,
-                      comm_degree)
+                      comm_degree, bits, share)

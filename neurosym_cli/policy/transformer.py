@@ -239,6 +239,11 @@ class CommTransformer(nn.Module):
         self.rounds = nn.ModuleList(CommRound(cfg.width, cfg.ffn, cfg.dropout, pair_dim) for _ in range(rounds))
         self.head = nn.Linear(cfg.width, action_dim)
 
+    @property
+    def message_dim(self) -> int:
+        """D, the floats of one message m_j->i (the value width, model.width): what a heard agent sends per round."""
+        return self.embed.out_features
+
     def forward(self, obs: Observation, select: Selector, picks: PickSource | None = None) -> PolicyOutput:
         """``picks``, when given and not None for a round, replaces ``select`` there (sparse path)."""
         h = torch.relu(self.embed(obs.agent))  # (B, N, D)

@@ -79,7 +79,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     import numpy as np
     import torch
 
-    from ..export import codegen, golden, spec
+    from ..export import bandwidth, codegen, golden, spec
     from ..export.folder import FORMAT, publish
     from ..export.policy import OPSET, export_policy
     from ..export.readme import readme
@@ -142,6 +142,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
             "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
             "opset": OPSET if policy is not None else None, "tolerance": cfg.export.tolerance,
             "semantics": spec.SEMANTICS if program is not None else None,
+            "bandwidth": bandwidth.of_run(cfg, policy, arrays),  # bits per agent per step: golden and evaluated
             "files": sorted(files + [EXPORT_MANIFEST, "README.md"]),
             "sha256": {f: hashlib.sha256((tmp / f).read_bytes()).hexdigest() for f in sorted(files)},
         }  # sha256: the check refuses an artifact edited after the export, even one no golden decision notices

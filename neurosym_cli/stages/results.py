@@ -10,7 +10,7 @@ from typing import Iterable
 from .. import schemes
 from ..config import RunConfig
 from ..baselines import run_args
-from ..degrees import LEGEND, NAMES
+from ..degrees import BANDWIDTH, BANDWIDTH_LEGEND, LEGEND, NAMES
 from ..run import RunDir, pipeline_command
 from ..run.layout import (FIGURES, IMPROVEMENT_CSV, PARETO_CSV, PARETO_PNG, REPORT_CSV, REPORT_CURVES, REPORT_JSON,
                           REPORT_MARL_EVAL, REPORT_PNG, SEED_PREFIX, RunsRoot, history_files, metrics_files)
@@ -21,9 +21,13 @@ from ..utils.console import console, log, metrics_table
 from ..utils.io import ArtifactError, read_json, write_csv, write_json
 from .guard import PROGRAM_PREFIXES, communication_guard
 
-COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree")),
+COLUMNS = [("cost", "loss"), *((m, NAMES[m]) for m in ("max_in", "max_out", "max_degree", "mean_degree", *BANDWIDTH)),
            ("collisions", "collisions")]
-"""(metric, column title) of every results table; any other metric the evaluations hold follows (columns)"""
+"""(metric, column title) of every results table; any other metric the evaluations hold follows (columns). An
+evaluation without one shows '-' (bits and link share: one written before them; collisions: a task without them)"""
+
+CAPTION = f"{LEGEND}\n{BANDWIDTH_LEGEND}"
+"""the lines under every results table: what each degree and bandwidth column is"""
 
 
 def columns(metrics: Iterable[str]) -> list[tuple[str, str]]:
@@ -181,7 +185,7 @@ def print_table(cfg: RunConfig, *, program: str | None = None) -> None:
     default, "" for the searched one)."""
     rows = collect(Path(cfg.exp_dir), pipeline_command(cfg))
     console.print(metrics_table(title(cfg), rows, columns(m for _, s in rows for m in s), err="ci95",
-                                caption=LEGEND))
+                                caption=CAPTION))
     labels, per_seed = _guard_inputs(cfg, cfg.program if program is None else program)
     line = communication_guard(rows, labels=labels, rerun=f"neurosym synth baseline=prog {run_args(cfg)}",
                                per_seed=per_seed, settings={"synth.front": cfg.synth.front,
@@ -202,7 +206,7 @@ def across_table(s, digits: int = 3):
 
     n = len(s.seeds)
     t = Table(title=f"{s.task}: {n} training seed{'s' if n > 1 else ''} ({', '.join(map(str, s.seeds))})",
-              caption=f"{seeds.caption(n)}\n{LEGEND}", header_style="bold", caption_justify="left")
+              caption=f"{seeds.caption(n)}\n{CAPTION}", header_style="bold", caption_justify="left")
     t.add_column("baseline")
     t.add_column("n seeds", justify="right")
     cols = columns(k for m in s.rows.values() for k in m)
