@@ -124,17 +124,18 @@ def test_csv_logger_writes_no_event_files(tmp_path):
 
 def test_tensorboard_missing_is_one_line(monkeypatch, tmp_path):
     from neurosym_cli.config import UserError
-    from neurosym_cli.utils.tracking import open_tracker
+    from neurosym_cli.utils.tracking import TrackedRun, open_tracker
 
     monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", None)
+    run = TrackedRun(key="t/b/seed0/train-oracle", tags={}, tensorboard=tmp_path / "tb", store=tmp_path)
     with pytest.raises(UserError, match=r"pip install -e '\.\[tensorboard\]'"):
-        open_tracker("tensorboard", tmp_path / "tb")
-    open_tracker("csv", tmp_path / "tb").log(1, {"x": 1.0})  # the plain tracker needs nothing
+        open_tracker("tensorboard", run)
+    open_tracker("csv", run).log(1, {"x": 1.0})  # the plain tracker needs nothing
 
 
 def test_bad_logger_value(tmp_path):
-    p = run(["train", "budget=tiny", "logger=wandb"], tmp_path, check=False)
-    assert p.returncode != 0 and "logger must be csv or tensorboard" in p.stderr
+    p = run(["train", "budget=tiny", "logger=neptune"], tmp_path, check=False)
+    assert p.returncode != 0 and "choose csv, tensorboard, mlflow or wandb, several joined by +" in p.stderr
 
 
 def test_training_curves_from_histories(tmp_path):

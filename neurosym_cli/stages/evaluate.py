@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
+from typing import Callable, Sequence
 
 from .. import __version__
 from ..config import RunConfig
@@ -19,31 +21,39 @@ from . import RunInfo
 from ..run import RunDir, train_command
 from ..run.layout import METRICS_CSV, METRICS_FILE
 from ..run.models import load_baseline
+from .tracked import open_run
 
 
-def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None) -> dict:
+def evaluate_baseline(cfg: RunConfig, info: RunInfo, label: str | None = None, *,
+                      then: Callable[[], Sequence[Path]] | None = None) -> dict:
     """Mean, std and 95 % interval over seeds of every metric; per-seed rows beside them. ``label`` names the row
-    and its directory instead of the baseline's own label (`neurosym rl`'s picks rl1, rl2)."""
+    and its directory instead of the baseline's own label (`neurosym rl`'s picks rl1, rl2); ``then``: what the
+    command does once the evaluation is written (its table and figures), returning the figures it drew, which the
+    run tracker (logger=) keeps with the evaluation."""
     device = resolve_device(cfg.device)
     seed_everything(cfg.seed)
     policy, env, comm = load_baseline(cfg, device)
     seeds = list(range(cfg.budget.eval_seeds))
-    t0 = time.perf_counter()
-    rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
-    seconds = time.perf_counter() - t0
-    bad = next((f"{k} of seed {r['seed']}" for r in rows for k, v in r.items()
-                if isinstance(v, float) and not math.isfinite(v)), None)
-    if bad:  # finite weights whose rollouts overflow: a nan is never a result, nor written over one
-        raise ArtifactError(f"evaluating {label or RunDir(cfg).label} gave a non-finite {bad}; nothing "
-                            f"written: the model's rollouts diverge, `{train_command(cfg)} overwrite=true` "
-                            "trains it again (a smaller optim.lr, or smaller task scales: task.dt, task.v_max)")
-    summary = summarize(rows)
-    out = RunDir(cfg).eval_dir(label)
-    label = label or RunDir(cfg).label
-    with run_lock(out):
-        _write(cfg, info, out, label=label, rows=rows, summary=summary, seconds=seconds,
-               rules=cfg.baseline.rules(cfg, comm))
-    log.info("evaluated %s on %d seeds in %.1f s -> %s", label, len(seeds), seconds, out)
+    name = label or RunDir(cfg).label
+    with open_run(cfg, stage="eval", run=f"eval-{name}", label=name) as tracker:
+        t0 = time.perf_counter()
+        rows = evaluate(env, policy, comm, seeds, device, cfg.task.detach_state)
+        seconds = time.perf_counter() - t0
+        bad = next((f"{k} of seed {r['seed']}" for r in rows for k, v in r.items()
+                    if isinstance(v, float) and not math.isfinite(v)), None)
+        if bad:  # finite weights whose rollouts overflow: a nan is never a result, nor written over one
+            raise ArtifactError(f"evaluating {name} gave a non-finite {bad}; nothing written: the model's rollouts "
+                                f"diverge, `{train_command(cfg)} overwrite=true` trains it again (a smaller "
+                                "optim.lr, or smaller task scales: task.dt, task.v_max)")
+        summary = summarize(rows)
+        out = RunDir(cfg).eval_dir(label)
+        with run_lock(out):
+            _write(cfg, info, out, label=name, rows=rows, summary=summary, seconds=seconds,
+                   rules=cfg.baseline.rules(cfg, comm))
+        log.info("evaluated %s on %d seeds in %.1f s -> %s", name, len(seeds), seconds, out)
+        tracker.summary({f"eval/{m}/{k}": v for m, stats in summary.items() for k, v in stats.items()})
+        for f in (out / METRICS_FILE, out / METRICS_CSV, *(then() if then else ())):
+            tracker.artifact(f)
     return summary
 
 

@@ -26,13 +26,14 @@ from ..utils.console import SearchDisplay, log, say, use_rich
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
-from ..utils.tracking import open_tracker
+from ..utils.tracking import Tracker
 from ..dsl.files import save_program
 from ..utils.io import read_json, write_csv, write_json
 from ..utils.seeding import STREAM_SYNTH, STREAM_SYNTH_DATA, generator, seed_everything
 from . import RunInfo
 from .front import round_front, write_front
 from .show import render
+from .tracked import open_run
 
 
 SEARCH_SCALARS = ("objective", "current", "best", "best_l1", "best_degree", "accepted")
@@ -58,9 +59,13 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
         scheme_provider(cfg)  # a corrupt result is an error, never "already done"
         log.info("already synthesized: %s (overwrite=true searches again)", result)
         return {"program": str(result), **_terms(rd.summary_file)}
-    with run_lock(rd.synth_dir):
+    with run_lock(rd.synth_dir), open_run(cfg, stage="synth", run=f"synth-{rd.program_tag}") as tracker:
         policy, env, data, device = collect_dataset(cfg)
-        return SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device)
+        out = SYNTHESIZERS[artifact.file](cfg, info, policy, env, data, device, tracker=tracker)
+        tracker.summary({f"synth/{k}": v for k, v in out.items() if k in ("objective", "l1", "degree")})
+        for f in (result, rd.summary_file, rd.trace_file, rd.front_file):
+            tracker.artifact(f)
+        return out
 
 
 def read_summary(cfg: RunConfig) -> dict:
@@ -92,7 +97,10 @@ def collect_dataset(cfg: RunConfig):
     return policy, env, data, device
 
 
-def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device) -> dict:
+def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device, *,
+                   tracker: Tracker) -> dict:
+    """MCMC per round (appendix A), every proposal's scalars to ``tracker`` (search/<name>, or
+    search/round<r>/<name> with several rounds); writes program.txt, summary.json, trace.csv (and front.json)."""
     spec = RoundSpec(steps=cfg.budget.mcmc_steps, restarts=cfg.synth.restarts, final_fraction=cfg.synth.final_fraction,
                      temperature=cfg.synth.temperature, rules=cfg.rules, max_depth=cfg.synth.max_depth,
                      det=cfg.baseline.det, own_scores=cfg.synth.own_scores, patience=cfg.synth.patience,
@@ -116,12 +124,11 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
                                   samples=cfg.synth.random_samples, gen=generator(cfg.seed, STREAM_SYNTH, 300 + r),
                                   device=device, backend=cfg.synth.backend, scale=scorer.scale)
         label = f"synth {cfg.task.name} {tag}" + (f" round {r + 1}" if cfg.task.rounds > 1 else "")
-        run = f"synth-{tag}" + (f"-round{r + 1}" if cfg.task.rounds > 1 else "")
-        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp, \
-                open_tracker(cfg.logger, rd.tensorboard_dir(run)) as tracker:
-            def on_step(step: int, result, row: dict) -> None:
+        group = "search/" + (f"round{r + 1}/" if cfg.task.rounds > 1 else "")
+        with SearchDisplay(label, spec.steps, cfg.lam, rich, MOVE_HELP, cfg.synth.objective) as disp:
+            def on_step(step: int, result, row: dict, group: str = group) -> None:
                 disp.update(step, result, row)
-                tracker.log(step, {f"search/{k}": row[k] for k in SEARCH_SCALARS})
+                tracker.log(step, {group + k: row[k] for k in SEARCH_SCALARS})
 
             res = search_round(scorer, spec, f"{cfg.seed}/{r}/{tag}", generator(cfg.seed, STREAM_SYNTH, 100 + r),
                                on_step, coarse)
@@ -200,7 +207,8 @@ def hall_of_fame(res, picked: tuple) -> dict[str, list[dict]]:
     return {by: [row(*x) for x in res.hall.front(by)] for by in ("complexity", "degree")}
 
 
-def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device) -> dict:
+def fit_trees(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBucket], device: torch.device, *,
+              tracker: Tracker) -> dict:
     """dt (appendix B): per round, label every pair of D by the greedy global hard attention with in- and
     out-degree <= K from the oracle's soft attention, then fit a tree on the pair features."""
     from ..synth.tree import fit_tree, greedy_hard_attention, soft_attention

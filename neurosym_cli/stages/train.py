@@ -28,9 +28,10 @@ from ..utils.console import ProgressReporter, log, say, use_rich
 from ..utils.cpu import runtime
 from ..utils.device import resolve_device
 from ..utils.lock import run_lock
-from ..utils.tracking import Tracker, open_tracker
+from ..utils.tracking import Tracker
 from ..utils.seeding import STREAM_TRAIN, generator, seed_everything
 from . import RunInfo
+from .tracked import open_run
 
 class Tracked:
     """A training reporter that also hands every step's metrics to the run tracker (logger=...)."""
@@ -202,28 +203,31 @@ def _train_locked(cfg: RunConfig, info: RunInfo, env, comm: CommProvider, *, ini
     label = f"{verb} {cfg.task.name} {run.model_name} seed{cfg.seed}"
     log.info("%s: %d rollouts, %d per step, T=%d, device %s -> %s", label, spec.rollouts, spec.batch,
              spec.horizon, device, out)
-    t0 = time.perf_counter()
     steps_before = state.step if state else 0
-    tb = run.tensorboard_dir(f"{verb}-{run.model_name}")
-    with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep, \
-            open_tracker(cfg.logger, tb, steps_before) as tracker:
-        try:
-            state = fit(policy, env, comm, spec, gen=generator(cfg.seed, STREAM_TRAIN), device=device,
-                        reporter=Tracked(rep, tracker), save=save, state=state)
-        except ResumeMismatch as e:
-            raise ArtifactError(f"{ckpt}: {e}; `{train_command(cfg)} overwrite=true` trains from the "
-                                "start") from None
-        except Diverged as e:
-            if steps_before == 0 and e.step == 1:  # before any update: the rate played no part, the task did
-                raise ConfigError(f"{e}, before any update, so not from the learning rate: task {cfg.task.name}'s "
-                                  "cost or dynamics give non-finite values on the first rollout; check its cost() "
-                                  "and step() (and task.dt, task.v_max); nothing was saved") from None
-            raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check the "
-                              "task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
-    seconds = time.perf_counter() - t0
-    rollouts = (state.step - steps_before) * spec.batch
-    last, final = _manifest(cfg, info, out, verb=verb, spec=spec, state=state, seconds=seconds, rollouts=rollouts,
-                              device=device)
+    with open_run(cfg, stage=verb, run=f"{verb}-{run.model_name}", start=steps_before) as tracker:
+        t0 = time.perf_counter()
+        with ProgressReporter(label, use_rich(cfg.progress, info.multirun), cfg.budget.log_every) as rep:
+            try:
+                state = fit(policy, env, comm, spec, gen=generator(cfg.seed, STREAM_TRAIN), device=device,
+                            reporter=Tracked(rep, tracker), save=save, state=state)
+            except ResumeMismatch as e:
+                raise ArtifactError(f"{ckpt}: {e}; `{train_command(cfg)} overwrite=true` trains from the "
+                                    "start") from None
+            except Diverged as e:
+                if steps_before == 0 and e.step == 1:  # before any update: the rate played no part, the task did
+                    raise ConfigError(f"{e}, before any update, so not from the learning rate: task "
+                                      f"{cfg.task.name}'s cost or dynamics give non-finite values on the first "
+                                      "rollout; check its cost() and step() (and task.dt, task.v_max); nothing was "
+                                      "saved") from None
+                raise ConfigError(f"{e}; {_kept(ckpt)}; lower {_rate_key(spec)} (now {_rate(spec):g}), or check "
+                                  "the task's scales (task.dt, task.v_max), then re-run with overwrite=true") from None
+        seconds = time.perf_counter() - t0
+        rollouts = (state.step - steps_before) * spec.batch
+        last, final = _manifest(cfg, info, out, verb=verb, spec=spec, state=state, seconds=seconds,
+                                rollouts=rollouts, device=device)
+        tracker.summary({"train/final_loss": final, "train/steps": state.step, "train/seconds": seconds})
+        for f in (run.history_file, run.manifest_file):
+            tracker.artifact(f)
     averaged = "the last step" if len(last) == 1 else f"the last {len(last)} of {state.step} steps"
     say(f"[green]done[/] {label}: training loss {final:.3f} (mean of {averaged}), {rollouts} rollouts in "
         f"{seconds:.0f} s ({rollouts / max(seconds, 1e-9):.1f} rollouts/s) -> {ckpt}")
