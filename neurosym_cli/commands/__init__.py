@@ -27,7 +27,7 @@ _RUN = ("seed", "runs_root", "device", "threads", "cpu_kernels", "compile", "pro
 USES: dict[str, tuple[str, ...]] = {
     "train": ("task", "budget", "baseline", "rules", *_RUN, "overwrite", "logger", "model", "optim", "rl"),
     "eval": ("task", "budget", "baseline", "rules", "lam", "features", "program", "selected", *_RUN, "plots",
-             "synth", "rl"),
+             "logger", "synth", "rl"),
     "synth": ("task", "budget", "baseline", "rules", "lam", "features", "selected", *_RUN, "overwrite", "logger",
               "synth"),
     "retrain": ("task", "budget", "baseline", "rules", "lam", "features", "program", "selected", *_RUN, "overwrite",
