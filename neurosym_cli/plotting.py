@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import Mapping, Sequence
 
+from .tasks.base import COST_WORDS
 from .viz.draw import save_figure
 
 
@@ -71,11 +72,12 @@ def place_labels(ax, xs, ys, names: Sequence[str], colors: Sequence[str], fontsi
 
 
 def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title: str, path: Path,
-            err: str = "std") -> Path:
+            err: str = "std", cost_words: str = COST_WORDS) -> Path:
     """The paper's Figure 2, one panel more: rows (baseline label, summary with the mean and ``err``, the error bar
     the title names, of cost, max_in, max_out) -> PNG with (a) loss per baseline, (b) max in- and out-degree per
     baseline, tf-full's drawn as what it is
-    (every other agent) and marked so, (c) loss against max in-degree, the trade-off the method is about."""
+    (every other agent) and marked so, (c) loss against max in-degree, the trade-off the method is about.
+    ``cost_words``: how the task's loss combines its agents (tasks.base.cost_words); "" when it is not known."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -93,7 +95,7 @@ def figure2(rows: Sequence[tuple[str, Mapping[str, Mapping[str, float]]]], title
                                   gridspec_kw={"width_ratios": [1, 1, 1.25]})
     a.barh(y, get("cost", "mean"), xerr=get("cost", err), color=colors, capsize=2)
     a.set_yticks(y, labels, fontsize=8)
-    a.set_xlabel("loss (time-averaged, summed over agents; lower is better)", fontsize=8)
+    a.set_xlabel(f"loss (time-averaged{', ' + cost_words if cost_words else ''}; lower is better)", fontsize=8)
     a.set_title("(a) loss", fontsize=9)
     h = 0.38
     b.barh(y + h / 2, get("max_in", "mean"), h, xerr=get("max_in", err), color=colors, capsize=2,
@@ -233,10 +235,10 @@ def pareto_plot(points: Sequence[tuple[str, float, float]], front: Sequence[int]
     return save_figure(fig, path)
 
 
-def stress_plot(results: Sequence[Mapping], cfg, path: Path) -> Path:
+def stress_plot(results: Sequence[Mapping], cfg, path: Path, cost_words: str = COST_WORDS) -> Path:
     """`neurosym stress`: loss, max in-degree and max out-degree (mean ± 95 % interval over the test seeds) of every
     baseline against the team size (top row, no link failure) and against the link failure rate (bottom row, the
-    task's team size); the trained team size is marked."""
+    task's team size); the trained team size is marked. ``cost_words``: as figure2's."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -247,7 +249,7 @@ def stress_plot(results: Sequence[Mapping], cfg, path: Path) -> Path:
     axes_of = [("agents", "max_agents", "agents in the largest episode, N (log scale)"),
                ("failure", "link_failure", "link failure rate (each directed link, every step)")]
     rows = [a for a in axes_of if any(r["axis"] == a[0] for r in results)]
-    metrics = [("cost", "loss (summed over agents; lower is better)"), ("max_in", "max in-degree"),
+    metrics = [("cost", f"loss ({cost_words}; lower is better)"), ("max_in", "max in-degree"),
                ("max_out", "max out-degree")]
     fig, axes = plt.subplots(len(rows), 3, figsize=(14, 3.9 * len(rows)), dpi=110, squeeze=False)
     trained_n = [r["max_agents"] for r in results if r["axis"] == "failure"]

@@ -63,6 +63,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
     """`neurosym render`: <exp_dir>/render/<label>/episode<k>.gif (or .mp4), episode<k>.png (the whole episode)
     and episode<k>-frames.png (four frames of the animation); with render.window=[x0,x1,y0,y1] (a zoom) the names
     are episode<k>-window<x0>_<x1>_<y0>_<y1>.*, so a zoom never replaces the whole picture."""
+    from ..tasks.base import cost_words
     from ..viz.animate import animate, edge_style, episode_png
     from ..viz.crowd import window_receivers
 
@@ -89,7 +90,7 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
                                stills=stills, window=window)
     except FileNotFoundError as e:
         raise ConfigError(str(e)) from None
-    png = episode_png(rec, out / f"{stem}.png", title, window)
+    png = episode_png(rec, out / f"{stem}.png", title, window, cost_words=cost_words(cfg.task))
     log.info("episode %d: loss %.3f (time-averaged), %d steps, %d agents", cfg.episode, rec.cost.mean(), rec.steps,
              rec.n_agents)
     say(f"[green]rendered[/] {anim} ({frames} frames), {png} and {stills}")

@@ -99,8 +99,9 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     write_csv(out.stress_file(".csv"), [{k: (v["mean"] if isinstance(v, dict) else v) for k, v in r.items()}
                                         for r in results])
     from ..plotting import stress_plot
+    from ..tasks.base import cost_words
 
-    png = stress_plot(results, cfg, out.stress_file(".png")) if cfg.plots else None
+    png = stress_plot(results, cfg, out.stress_file(".png"), cost_words(cfg.task)) if cfg.plots else None
     print_stress(results, cfg, stops)
     say(f"[green]stress done[/] in {clock(time.perf_counter() - t0)}: {out.stress_file('.csv')}"
         + (f", {png}" if png else ""))

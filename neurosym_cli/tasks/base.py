@@ -269,6 +269,24 @@ def require(task: Any, capability: str, who: str) -> Callable:
     return fn
 
 
+COST_WORDS = "summed over agents"
+"""how a task's per-step loss (``cost``) combines its agents, as the figures' loss axes say it, when the task class
+does not say (its ``cost_words``): every built-in task's cost is a sum (docs/extending.md, 'Sum or mean')"""
+
+
+def cost_words(cfg: Any) -> str:
+    """The ``cost_words`` of the task class of ``cfg`` (a task config, by its ``_target_``), e.g. "averaged over
+    agents"; COST_WORDS when the class has none. Anything but one non-empty line of text is a one-line ConfigError."""
+    from .registry import task_class
+
+    cls = task_class(cfg._target_)
+    words = getattr(cls, "cost_words", COST_WORDS)
+    if not isinstance(words, str) or not words.strip() or "\n" in words:
+        raise ConfigError(f"{cls.__name__}.cost_words must be one line of text, e.g. 'averaged over agents' "
+                          f"(the figures' loss axes print it), got {words!r}")
+    return words.strip()
+
+
 def safe_norm(x: Tensor, dim: int = -1, eps: float = 1e-12) -> Tensor:
     """Euclidean norm with a finite gradient at zero (the diagonal of pairwise distances)."""
     return torch.sqrt(torch.clamp((x * x).sum(dim), min=eps))
