@@ -72,7 +72,8 @@ def test_export_then_check_passes_without_neurosym(runs, task, kind):
     status = {r["file"]: r["status"] for r in report["results"]}
     want_c = "ok" if shutil.which("cc") else "skipped"
     assert status == {"program.py": "ok", "program.json": "ok", "program.h": want_c, "policy.onnx": "ok",
-                      "policy.pt": "ok", "agent/*.onnx": "ok", "checksums": "ok"}, report["results"]
+                      "policy.pt": "ok", "policy.pt2": "ok", "agent/*.onnx": "ok",
+                      "checksums": "ok"}, report["results"]
     folder = out["folder"]
     prog = json.loads(open(f"{folder}/program.json").read())
     assert len(prog["rounds"]) == cfg.task.rounds  # unlabeled-goals: one program per round
@@ -120,9 +121,10 @@ def test_a_baseline_without_a_program_exports_the_policy_alone(runs):
     cfg, out = exported(runs, "random-grid", "tf-full", program=False)
     assert not out["program"] and out["policy"]
     names = set(out["files"])
-    assert "program.py" not in names and {"policy.onnx", "policy.pt", "golden.npz"} <= names
+    assert "program.py" not in names and {"policy.onnx", "policy.pt", "policy.pt2", "golden.npz"} <= names
     report = ns.export(cfg, "tf-full", check=True)
-    assert [r["file"] for r in report["results"]] == ["policy.onnx", "policy.pt", "agent/*.onnx", "checksums"]
+    assert [r["file"] for r in report["results"]] == ["policy.pt", "policy.pt2", "policy.onnx", "agent/*.onnx",
+                                                      "checksums"]
     assert all(r["status"] == "ok" for r in report["results"])
 
 

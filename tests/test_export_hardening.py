@@ -1,8 +1,9 @@
 """`neurosym export` keeps its promises under hostile use (docs/reliability.md, "Export"): it only ever replaces
 an export (never a run directory or a user's folder, even with overwrite=true), two exports into one folder at
 once do not both report success, the check fails what it did not check (an edited program.json, a golden file
-without episodes, nothing replayed, an infinite tolerance), the check works with a relative runs root, and a
-missing onnx extra is one line naming it. Program-file exports (no training) keep every test a few seconds."""
+without episodes, nothing replayed, an infinite tolerance), and the check works with a relative runs root (a
+missing onnx extra: tests/test_export_formats.py). Program-file exports (no training) keep every test a few
+seconds."""
 
 import json
 import os
@@ -206,17 +207,3 @@ def test_export_then_check_with_the_default_relative_runs_root(tmp_path, monkeyp
     assert not os.path.isabs(out["folder"])
     report = ns.export(cfg, check=True)
     assert report["first_mismatch"] is None and report["exit"] == 0
-
-
-def test_exporting_a_policy_without_the_onnx_extra_is_one_line(prog_cfg, monkeypatch):
-    from neurosym_cli.run import RunDir
-
-    make, root = prog_cfg
-    cfg = make()
-    model = RunDir(cfg).model_file
-    model.parent.mkdir(parents=True)
-    model.write_bytes(b"a trained model")  # refused before it is read
-    monkeypatch.setitem(sys.modules, "onnx", None)  # `import onnx` raises ImportError, as when not installed
-    with pytest.raises(ns.UserError, match=r'the onnx extra: pip install -e "\.\[onnx\]"'):
-        ns.export(cfg)
-    assert not (root / "random-cross" / "tiny" / "seed0" / "export").exists()

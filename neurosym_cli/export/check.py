@@ -27,9 +27,11 @@ runpy.run_path(sys.argv[0], run_name='__main__')
 """
 
 
-def run_check(folder: Path, tolerance: float | None = None, timeout: float = 600) -> dict:
+def run_check(folder: Path, tolerance: float | None = None, required: list[str] | tuple = (), timeout: float = 600
+              ) -> dict:
     """The checker's report (results per artifact, the first mismatch or None, whether neurosym was importable).
-    A folder that is not an export, or a checker that cannot start, is one line."""
+    ``required``: policy formats (export.formats) that must be in the folder and pass, not be skipped. A folder
+    that is not an export, or a checker that cannot start, is one line."""
     folder = Path(folder).resolve()  # the checker runs in a temporary directory: a relative path would not reach
     problem = manifest_problem(folder) or (None if (folder / "check.py").is_file() else "it holds no check.py")
     if problem:
@@ -42,6 +44,8 @@ def run_check(folder: Path, tolerance: float | None = None, timeout: float = 600
                str(report)]
         if tolerance is not None:
             cmd += ["--tolerance", repr(tolerance)]
+        if required:
+            cmd += ["--require", ",".join(required)]
         try:  # cwd: an empty directory, so nothing beside the caller's working directory is importable either;
             # -B: the check writes nothing (no __pycache__) into the folder it checks
             p = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True, timeout=timeout)

@@ -1,8 +1,10 @@
-"""The transformer as files a robot can load without neurosym: TorchScript and ONNX, with whom each agent hears
-given as input (the exported model never decides it) and the task's target (the speed clip, the goal softmax; of
-the action and the agent's own input s_i) inside, so the output is the action as the task applies it.
+"""The transformer as functions a robot can load without neurosym, with whom each agent hears given as input (the
+exported model never decides it) and the task's target (the speed clip, the goal softmax; of the action and the
+agent's own input s_i) inside, so the output is the action as the task applies it. Each is a ``Graph``: the module,
+the recorded inputs it is traced on, and the names and free axes of its inputs and outputs; formats.py writes them
+as TorchScript, torch.export and ONNX files.
 
-    policy.pt / policy.onnx   the team in one call: agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) int64
+    policy.*                  the team in one call: agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) int64
                               (-1 = nobody; an agent picked twice counts once) -> action (B, N, A) as applied,
                               and raw (B, N, A), the transformer's output before Task.target (what a simulator's
                               Task.step takes)
@@ -16,9 +18,7 @@ exported function is the one evaluation runs, up to float rounding.
 
 from __future__ import annotations
 
-import io
-import warnings
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import torch
 from torch import Tensor, nn
@@ -26,10 +26,32 @@ from torch import Tensor, nn
 from ..dsl.interpret import dedup_valid_traced
 from ..policy.transformer import CommTransformer
 from ..tasks.base import Target
-from ..utils.io import atomic_write_bytes
+from ..utils.ops import SOFTMAX_WRITTEN_OUT_BELOW
 
-OPSET = 17
-"""ONNX opset of every exported graph (onnxruntime >= 1.14 runs it)"""
+Axes = tuple  # of str | None
+"""per axis of a tensor the name of its free size (B, N, K, M), or None where the size is fixed"""
+
+
+@dataclass(frozen=True)
+class Graph:
+    """One function to export: ``file`` its path without the suffix ("policy", "agent/encode"), the module, the
+    example inputs it is traced on, its inputs' and outputs' names with their Axes (in order), and the bounds
+    [low, high] (high None: unbounded) of a free size the traced function holds only within."""
+
+    file: str
+    module: nn.Module
+    args: tuple
+    inputs: dict
+    outputs: dict
+    bounds: dict = field(default_factory=dict)
+
+
+def k_bounds(k: int) -> tuple[int, int | None]:
+    """The K (picks per agent) a graph traced at ``k`` serves: softmax_last's form is chosen by K when traced, so
+    [1, 15] when traced below 16, else [16, unbounded)."""
+    cut = SOFTMAX_WRITTEN_OUT_BELOW
+    return (1, cut - 1) if k < cut else (cut, None)
+
 
 class TeamPolicy(nn.Module):
     """agent (B, N, Ds), rel (B, N, N, Dp), picks (B, R, N, K) long -> (target action, raw action), (B, N, A) each."""
@@ -97,53 +119,35 @@ class AgentAct(nn.Module):
         return self.target(raw.unsqueeze(0), s.unsqueeze(0))[0], raw  # targets are written for (B, N, A)
 
 
-def _onnx(module: nn.Module, args: tuple, names: list[str], dynamic: dict[str, dict[int, str]],
-          out: str | list[str], path: Path) -> None:
-    buf = io.BytesIO()
-    with warnings.catch_warnings():  # the tracer's notes are expected (shapes read as ints, the legacy exporter)
-        warnings.simplefilter("ignore")
-        torch.onnx.export(module.eval(), args, buf, dynamo=False, opset_version=OPSET, input_names=names,
-                          output_names=[out] if isinstance(out, str) else out, dynamic_axes=dynamic)
-    atomic_write_bytes(path, buf.getvalue())
-
-
-def export_policy(policy: CommTransformer, target: Target, agent: Tensor, rel: Tensor, picks: Tensor,
-                  folder: Path) -> list[str]:
-    """Write policy.pt, policy.onnx and agent/*.onnx, traced on one real input (agent (1, N, Ds), rel (1, N, N, Dp),
-    picks (1, R, N, K)); returns the files written, relative to ``folder``."""
+def policy_graphs(policy: CommTransformer, target: Target, agent: Tensor, rel: Tensor, picks: Tensor
+                  ) -> tuple[Graph, list[Graph]]:
+    """(the team in one call, the per-agent pieces), traced on one recorded episode: agent (T, N, Ds), rel (T, N, N,
+    Dp), picks (T, R, N, K) with the steps as the batch. The examples hold at least two steps and two picks (a
+    padded pick is -1, nobody): a free size traced at 1 would be fixed at 1."""
     policy = policy.cpu().eval()
-    team = TeamPolicy(policy, target).eval()
-    args = (agent.cpu(), rel.cpu(), picks.cpu())
-    with warnings.catch_warnings(), torch.no_grad():
-        warnings.simplefilter("ignore")
-        traced = torch.jit.trace(team, args, check_trace=False)
-    buf = io.BytesIO()
-    with warnings.catch_warnings():  # TorchScript is deprecated in favour of torch.export, still what robots load
-        warnings.simplefilter("ignore")
-        torch.jit.save(traced, buf)
-    atomic_write_bytes(folder / "policy.pt", buf.getvalue())
-    _onnx(team, args, ["agent", "rel", "picks"],
-          {"agent": {0: "B", 1: "N"}, "rel": {0: "B", 1: "N", 2: "N"}, "picks": {0: "B", 2: "N", 3: "K"},
-           "action": {0: "B", 1: "N"}, "raw": {0: "B", 1: "N"}}, ["action", "raw"], folder / "policy.onnx")
-    files = ["policy.pt", "policy.onnx"]
+    agent, rel, picks = agent.cpu(), rel.cpu(), picks.cpu()
+    if agent.shape[0] < 2:
+        agent, rel, picks = (torch.cat([t, t]) for t in (agent, rel, picks))
+    if picks.shape[-1] < 2:
+        picks = torch.cat([picks, torch.full_like(picks[..., :1], -1)], -1)
+    bounds = {"K": k_bounds(picks.shape[-1])}
+    team = Graph("policy", TeamPolicy(policy, target).eval(), (agent, rel, picks),
+                 {"agent": ("B", "N", None), "rel": ("B", "N", "N", None), "picks": ("B", None, "N", "K")},
+                 {"action": ("B", "N", None), "raw": ("B", "N", None)}, bounds)
     d = policy.embed.out_features
-    s = agent[0].cpu()  # (N, Ds): N rows as M agents
+    s = agent[0]  # (N, Ds): N rows as M agents
     n, k, p = s.shape[0], picks.shape[-1], rel.shape[-1]
     x = torch.zeros(n, d)
-    _onnx(AgentEncode(policy), (s,), ["s"], {"s": {0: "M"}, "h": {0: "M"}}, "h", folder / "agent" / "encode.onnx")
-    files.append("agent/encode.onnx")
+    m = ("M", None)
+    pieces = [Graph("agent/encode", AgentEncode(policy).eval(), (s,), {"s": m}, {"h": m})]
     for r in range(policy.n_rounds):
-        _onnx(AgentMessage(policy, r), (x, rel[0, :, 0].cpu()), ["x", "o_ji"], {"x": {0: "M"}, "o_ji": {0: "M"},
-              "m": {0: "M"}}, "m", folder / "agent" / f"message{r + 1}.onnx")
-        _onnx(AgentReceive(policy, r), (x, x, torch.zeros(n, k, p), torch.zeros(n, k, d),
-                                        torch.ones(n, k, dtype=torch.bool)),
-              ["x", "h", "o_ij", "m", "valid"],
-              {"x": {0: "M"}, "h": {0: "M"}, "o_ij": {0: "M", 1: "K"}, "m": {0: "M", 1: "K"},
-               "valid": {0: "M", 1: "K"}, "y": {0: "M"}}, "y", folder / "agent" / f"receive{r + 1}.onnx")
-        files += [f"agent/message{r + 1}.onnx", f"agent/receive{r + 1}.onnx"]
-    _onnx(AgentAct(policy, target), (x, s), ["y", "s"], {"y": {0: "M"}, "s": {0: "M"}, "action": {0: "M"},
-                                                      "raw": {0: "M"}},
-          ["action", "raw"],
-          folder / "agent" / "act.onnx")
-    files.append("agent/act.onnx")
-    return files
+        pieces.append(Graph(f"agent/message{r + 1}", AgentMessage(policy, r).eval(), (x, rel[0, :, 0]),
+                            {"x": m, "o_ji": m}, {"m": m}))
+        pieces.append(Graph(f"agent/receive{r + 1}", AgentReceive(policy, r).eval(),
+                            (x, x.clone(), torch.zeros(n, k, p), torch.zeros(n, k, d),  # x, h apart: one tensor
+                             torch.ones(n, k, dtype=torch.bool)),  # given twice is one input to torch.export
+                            {"x": m, "h": m, "o_ij": ("M", "K", None), "m": ("M", "K", None), "valid": ("M", "K")},
+                            {"y": m}, bounds))
+    pieces.append(Graph("agent/act", AgentAct(policy, target).eval(), (x, s), {"y": m, "s": m},
+                        {"action": m, "raw": m}))
+    return team, pieces

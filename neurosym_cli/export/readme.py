@@ -6,7 +6,6 @@ from __future__ import annotations
 from ..dsl.ast import Program
 from ..dsl.printer import describe, rule_text
 from ..dsl.vocabulary import FeatureSet
-from .bandwidth import readme_lines
 from .spec import SEMANTICS_TEXT, used_features
 
 
@@ -23,6 +22,40 @@ def _features(program: Program, vocab: FeatureSet, task: str) -> list[str]:
             how = {"x": f"x of {v}", "y": f"y of {v}", "d": f"hypot of {v}", "theta": f"atan2(y, x) of {v}"}[s.part]
         rows.append(f"| `{f.name}` | {'my own state' if f.of == 'self' else 'the candidate j'} | {f.words} | "
                     f"{f.unit or '-'} | {how} |")
+    return rows
+
+
+_LOAD = {  # format -> (file, what it is, loading it from Python, from C++)
+    "torchscript": ("policy.pt", "TorchScript",
+                    '`m = torch.jit.load("policy.pt"); action, raw = m(agent, rel, picks)`',
+                    'libtorch: `auto m = torch::jit::load("policy.pt"); auto out = m.forward({agent, rel, '
+                    'picks}).toTuple();`'),
+    "pt2": ("policy.pt2", "a torch.export program (`torch.export.save`)",
+            '`m = torch.export.load("policy.pt2").module(); action, raw = m(agent, rel, picks)`',
+            "compile it once with AOTInductor (`torch._inductor.aoti_compile_and_package(torch.export.load("
+            '"policy.pt2"), package_path="policy_aoti.pt2")`) and run that with libtorch\'s '
+            "`torch::inductor::AOTIModelPackageLoader` (not covered by check.py)"),
+    "onnx": ("policy.onnx", "ONNX, and the per-agent pieces `agent/*.onnx` below",
+             '`s = onnxruntime.InferenceSession("policy.onnx"); action, raw = s.run(None, {"agent": agent, "rel": '
+             'rel, "picks": picks})`',
+             'ONNX Runtime\'s C++ API: `Ort::Session s(env, "policy.onnx", opts); s.Run(...)` with the inputs named '
+             "as here"),
+}
+
+
+def _formats(formats: dict | None) -> list[str]:
+    """One item per policy format of the manifest: its file, its exporter and free sizes, how to load it."""
+    if formats is None:  # an export written before formats were recorded: TorchScript and legacy ONNX
+        formats = {"torchscript": {"files": ["policy.pt"]}, "onnx": {"files": ["policy.onnx"]}}
+    rows = []
+    for fmt, made in formats.items():
+        file, what, py, cpp = _LOAD[fmt]
+        if "skipped" in made:
+            rows.append(f"- `{file}` ({fmt}): not written ({made['skipped']})")
+            continue
+        opset = f", opset {made['opset']}" if made.get("opset") else ""
+        made_by = f" Made by {made['exporter']}{opset}; free sizes {made['free']}." if "exporter" in made else ""
+        rows.append(f"- `{file}`, {what}.{made_by} Python: {py}. C++: {cpp}.")
     return rows
 
 
@@ -83,17 +116,17 @@ def readme(manifest: dict, golden: dict, program: Program | None, vocab: Feature
                 "the agents it heard, in index order, padded with -1).", ""]
     if m["policy"]:
         out += ["## The policy", "",
-                f"- `policy.onnx` (opset {m['opset']}) and `policy.pt` (TorchScript, `torch.jit.load`): the team in "
-                f"one call, `agent` float32 (B, N, {ds}), `rel` float32 (B, N, N, {dp}) with rel[b, i, j] = o_ij, "
-                f"`picks` int64 (B, {rounds}, N, K): whom agent i hears in each round, one slot per rule (-1: "
-                f"nobody; an agent in two slots is heard once) -> `action` float32 (B, N, {a}).",
-                "- `agent/encode.onnx` s (M, Ds) -> h (M, D); `agent/message<r>.onnx` x (M, D), o_ji (M, Dp) -> "
+                f"The team in one call: `agent` float32 (B, N, {ds}), `rel` float32 (B, N, N, {dp}) with rel[b, i, j] "
+                f"= o_ij, `picks` int64 (B, {rounds}, N, K): whom agent i hears in each round, one slot per rule (-1: "
+                f"nobody; an agent in two slots is heard once) -> `action` float32 (B, N, {a}), `raw` (B, N, {a}) "
+                "before the task's target. Formats (manifest.json's `formats` says which exporter made each file):",
+                "", *_formats(m.get("formats")),
+                "", "- `agent/encode.onnx` s (M, Ds) -> h (M, D); `agent/message<r>.onnx` x (M, D), o_ji (M, Dp) -> "
                 "m (M, D); `agent/receive<r>.onnx` x, h (M, D), o_ij (M, K, Dp), m (M, K, D), valid (M, K) bool -> "
                 "y (M, D), the next round's x; `agent/act.onnx` y (M, D), and s (M, Ds) where the task's "
                 "target reads the agent's own input -> action (M, A). Round 1's x is h.", ""]
     eps = ", ".join(f"{e['episode']} (eval seed {e['eval_seed']}, {e['steps']} steps, {e['agents']} agents"
                     + (f", loss {e['loss']:.6g}" if "loss" in e else "") + ")" for e in golden["episodes"])
-    out += readme_lines(m["bandwidth"]) if m.get("bandwidth") else []  # what the messages cost
     out += ["## Golden vectors", "",
             f"`golden.npz` (numpy arrays, no pickles; `golden.json` says what they are): evaluation episodes {eps}, "
             "recorded by the rollout `neurosym eval` runs: per step the inputs, the uniforms each random rule drew "

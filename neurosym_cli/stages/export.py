@@ -15,6 +15,7 @@ from ..run.layout import EXPORT_MANIFEST
 from ..config import ConfigError, RunConfig, UserError
 from ..utils.console import log, say
 from ..utils.io import write_json, write_text
+from ..verb_config import POLICY_FORMATS
 from . import RunInfo
 
 
@@ -30,29 +31,19 @@ def export(cfg: RunConfig, info: RunInfo | None = None) -> dict:
 
     folder = export_dir(cfg)
     if cfg.export.check:
-        return check(folder, cfg.export.tolerance)
+        return check(folder, cfg.export.tolerance, cfg.export.formats)
     claimed = claim(folder, overwrite=cfg.overwrite)  # only an export is ever replaced
-    _need_onnx(cfg)
     return write_export(cfg, folder, claimed)
 
 
-def _need_onnx(cfg: RunConfig) -> None:
-    """One line naming the extra when the policy's ONNX files cannot be written (torch.onnx needs onnx)."""
-    if not RunDir(cfg).model_file.exists():
-        return
-    try:
-        import onnx  # noqa: F401
-    except ImportError:
-        raise UserError('exporting the policy needs the onnx extra: pip install -e ".[onnx]" (or pip install '
-                        'onnx onnxruntime); a program file alone (program=FILE, no trained model) needs none') from None
-
-
-def check(folder: Path, tolerance: float | None = None) -> dict:
+def check(folder: Path, tolerance: float | None = None, required: list[str] = ()) -> dict:
+    """The check's report, one line per artifact; UserError on a mismatch, or on a ``required`` policy format
+    (export.formats) that is not in the folder or cannot run here."""
     from ..export.check import run_check
 
     if not folder.exists():
         raise UserError(f"no export at {folder}; `neurosym export` with the same settings writes it")
-    report = run_check(folder, tolerance)
+    report = run_check(folder, tolerance, required)
     for r in report["results"]:
         colour = {"ok": "green", "skipped": "yellow"}.get(r["status"], "red")
         say(f"  {r['file']:<14} [{colour}]{r['status']:<9}[/] {r['detail']}")
@@ -79,9 +70,10 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     import numpy as np
     import torch
 
-    from ..export import bandwidth, codegen, golden, spec
+    from ..export import codegen, golden, spec
     from ..export.folder import FORMAT, publish
-    from ..export.policy import OPSET, export_policy
+    from ..export.formats import write_formats
+    from ..export.policy import policy_graphs
     from ..export.readme import readme
     from ..tasks import make_task
     from ..tasks.base import applied_action
@@ -101,6 +93,11 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     program = prog_comm.program if prog_comm is not None else None
     if program is None and policy is None:
         raise ConfigError("nothing to export: no program and no trained model")
+    if policy is None and cfg.export.formats:
+        raise ConfigError(f"export.formats={list(cfg.export.formats)} names policy formats, but there is no trained "
+                          f"model for {RunDir(cfg).label} (a program alone has no policy to write)")
+    asked = list(cfg.export.formats or POLICY_FORMATS)
+    formats: dict = {}
     vocab = prog_comm.fmap.vocab if prog_comm is not None else None
     tmp = folder.parent / f".{folder.name}.tmp-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -126,11 +123,11 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
         atomic_write_bytes(tmp / "golden.npz", buf.getvalue())
         write_json(tmp / "golden.json", meta)
         files += ["golden.npz", "golden.json"]
-        if policy is not None:
-            e = 0
-            files += export_policy(policy, applied_action(task), torch.from_numpy(arrays[f"e{e}_agent"][:1]),
-                                   torch.from_numpy(arrays[f"e{e}_rel"][:1]),
-                                   torch.from_numpy(arrays[f"e{e}_picks"][:1]), tmp)
+        if policy is not None:  # traced on golden episode 0, its steps as the batch
+            team, pieces = policy_graphs(policy, applied_action(task),
+                                         *(torch.from_numpy(arrays[f"e0_{k}"]) for k in ("agent", "rel", "picks")))
+            formats = write_formats(team, pieces, tmp, asked, cfg.export.onnx)
+            files += [f for v in formats.values() for f in v["files"]]
         standalone = Path(__file__).resolve().parents[1] / "export" / "standalone"
         for name in ("check.py", "agent_runtime.py"):
             shutil.copyfile(standalone / name, tmp / name)
@@ -140,9 +137,8 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
             "budget": cfg.budget.name, "seed": cfg.seed, "features": cfg.features, "rounds": task.rounds,
             "program": program is not None, "policy": policy is not None,
             "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
-            "opset": OPSET if policy is not None else None, "tolerance": cfg.export.tolerance,
+            "formats": formats, "opset": formats.get("onnx", {}).get("opset"), "tolerance": cfg.export.tolerance,
             "semantics": spec.SEMANTICS if program is not None else None,
-            "bandwidth": bandwidth.of_run(cfg, policy, arrays),  # bits per agent per step: golden and evaluated
             "files": sorted(files + [EXPORT_MANIFEST, "README.md"]),
             "sha256": {f: hashlib.sha256((tmp / f).read_bytes()).hexdigest() for f in sorted(files)},
         }  # sha256: the check refuses an artifact edited after the export, even one no golden decision notices
@@ -158,8 +154,16 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     elif policy is None:
         say(f"no trained model for {label}: exported the program alone")
     say(f"[green]exported[/] {label} to {folder}: {', '.join(sorted(files))}")
+    for fmt, made in formats.items():
+        say(f"  {fmt:<11} " + (f"[yellow]not written[/]: {made['skipped']}" if "skipped" in made else
+                              f"{', '.join(made['files'][:2])}{' ...' if len(made['files']) > 2 else ''} "
+                              f"({made['exporter']})"))
+    failed = [f for f in cfg.export.formats if "skipped" in formats[f]]
+    if failed:  # a format asked for by name must be written; the others are kept
+        raise UserError(f"export.formats names {failed[0]}, which was not written ({formats[failed[0]]['skipped']}); "
+                        f"the rest is in {folder}: fix that and rerun with overwrite=true")
     say("check it in a process without neurosym: the same command with --check (or export.check=true)")
     log.info("golden episodes: %s", ", ".join(f"{m['episode']} (loss {m.get('loss', float('nan')):.4f})"
                                              for m in meta["episodes"]))
     return {"folder": str(folder), "files": sorted(files), "program": program is not None,
-            "policy": policy is not None, "episodes": meta["episodes"]}
+            "policy": policy is not None, "episodes": meta["episodes"], "formats": formats}

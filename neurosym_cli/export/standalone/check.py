@@ -1,14 +1,15 @@
 """Replays an export folder's golden vectors through every artifact in it, without neurosym.
 
-    python check.py [FOLDER] [--tolerance 1e-5] [--report report.json]
+    python check.py [FOLDER] [--tolerance 1e-5] [--report report.json] [--require pt2,onnx]
 
 program.py (plain Python), program.json (read by this file as its semantics say), program.h (compiled with the
-system's cc, where there is one), policy.onnx and agent/*.onnx (onnxruntime), policy.pt (torch), each on the
-recorded inputs: picks must agree exactly (random rules fed the recorded uniforms), actions within the tolerance
-(max absolute difference, finite). Every file must also be the one exported (the manifest's sha256). Prints one
-line per artifact; the first mismatch is named by file, episode, step, round and agent. Exit 0: all agree; 1: a
-mismatch, or nothing replayed; 2: the folder cannot be read (no golden episode included). An artifact whose
-runtime is missing is skipped, with the reason.
+system's cc, where there is one), policy.pt (TorchScript: torch), policy.pt2 (torch.export: torch), policy.onnx
+and agent/*.onnx (onnxruntime), each on the recorded inputs: picks must agree exactly (random rules fed the
+recorded uniforms), actions within the tolerance (max absolute difference, finite). Every file must also be the
+one exported (the manifest's sha256). Prints one line per artifact; the first mismatch is named by file, episode,
+step, round and agent. Exit 0: all agree; 1: a mismatch, a required format (--require) missing or not run, or
+nothing replayed; 2: the folder cannot be read (no golden episode included). An artifact whose runtime is missing,
+or a policy format the export could not write, is skipped, with the reason.
 """
 
 from __future__ import annotations
@@ -307,6 +308,20 @@ def check_torchscript(folder: Path, g: Golden, tol: float) -> str:
     return f"actions agree, max |diff| {worst:.2g} <= {tol:g}"
 
 
+def check_pt2(folder: Path, g: Golden, tol: float) -> str:
+    try:
+        import torch
+    except ImportError:
+        raise SkipCheck("torch is not installed") from None
+    m = torch.export.load(str(folder / "policy.pt2")).module()
+    worst = 0.0
+    with torch.no_grad():
+        for e in g.episodes:
+            out = m(*(torch.from_numpy(g[f"e{e}_{k}"]) for k in ("agent", "rel", "picks")))[0].numpy()
+            worst = max(worst, compare_actions("policy.pt2", e, out, g[f"e{e}_action"], tol))
+    return f"actions agree, max |diff| {worst:.2g} <= {tol:g}"
+
+
 def check_agents(folder: Path, g: Golden, tol: float) -> str:
     """agent/*.onnx, one agent at a time, messages passed as on a robot, fed the golden picks."""
     try:
@@ -330,6 +345,34 @@ class SkipCheck(Exception):
     """An artifact this machine cannot run (its runtime is missing)."""
 
 
+POLICY = {  # format (the manifest's "formats", export.formats) -> its main file, its checks
+    "torchscript": ("policy.pt", [("policy.pt", check_torchscript)]),
+    "pt2": ("policy.pt2", [("policy.pt2", check_pt2)]),
+    "onnx": ("policy.onnx", [("policy.onnx", check_onnx), ("agent/*.onnx", check_agents)]),
+}
+
+
+def policy_checks(folder: Path, manifest: dict, present: set, g: Golden, tol: float) -> list:
+    """(format, file, check) for every policy format the export wrote or the folder holds; the check of one the
+    export could not write raises SkipCheck with its reason. An export written before formats were recorded
+    held TorchScript and ONNX."""
+    made = manifest.get("formats")
+    out = []
+    for fmt, (main, checks) in POLICY.items():
+        entry = (made or {}).get(fmt)
+        written = main in present or (entry is not None and entry.get("files")) or (
+            made is None and manifest["policy"] and fmt != "pt2")
+        if written:
+            out += [(fmt, name, lambda fn=fn: fn(folder, g, tol)) for name, fn in checks]
+        elif entry is not None:
+            out.append((fmt, main, lambda why=entry.get("skipped", "?"): skip(f"not written by the export: {why}")))
+    return out
+
+
+def skip(why: str):
+    raise SkipCheck(why)
+
+
 def neurosym_importable() -> bool:
     import importlib.util
 
@@ -344,7 +387,13 @@ def main(argv=None) -> int:
     ap.add_argument("folder", nargs="?", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--tolerance", type=float, default=None, help="max |action difference| (default: manifest's)")
     ap.add_argument("--report", default="", help="also write the results as JSON here")
+    ap.add_argument("--require", default="", help="policy formats that must be here and pass (comma-separated: "
+                                                  f"{', '.join(POLICY)}); others may be skipped")
     args = ap.parse_args(argv)
+    required = [f for f in args.require.split(",") if f]
+    if any(f not in POLICY for f in required):
+        print(f"check: --require takes {', '.join(POLICY)}, got {args.require!r}", file=sys.stderr)
+        return 2
     folder = Path(args.folder).resolve()
     try:
         manifest = json.loads((folder / "manifest.json").read_text())
@@ -362,17 +411,23 @@ def main(argv=None) -> int:
         checks += [("program.py", lambda: check_program_py(folder, g)),
                    ("program.json", lambda: check_program_json(folder, g)),
                    ("program.h", lambda: check_program_h(folder, g))]
-    if manifest["policy"] or present & {"policy.onnx", "policy.pt", "agent"}:
-        checks += [("policy.onnx", lambda: check_onnx(folder, g, tol)),
-                   ("policy.pt", lambda: check_torchscript(folder, g, tol)),
-                   ("agent/*.onnx", lambda: check_agents(folder, g, tol))]
-    checks.append(("checksums", lambda: check_checksums(folder, manifest)))
+    checks = [(None, name, fn) for name, fn in checks]
+    checks += policy_checks(folder, manifest, present, g, tol)
+    for fmt in required:  # asked for, and neither written nor in the folder
+        if fmt not in {c[0] for c in checks}:
+            checks.append((fmt, POLICY[fmt][0], lambda: skip("not in the folder")))
+    checks.append((None, "checksums", lambda: check_checksums(folder, manifest)))
     results, first = [], None
-    for name, fn in checks:
+    for fmt, name, fn in checks:
         try:
             results.append({"file": name, "status": "ok", "detail": fn()})
         except SkipCheck as e:
-            results.append({"file": name, "status": "skipped", "detail": str(e)})
+            if fmt in required:  # a format asked for by name may not be skipped
+                msg = f"{name}: required ({fmt}) but {e}"
+                results.append({"file": name, "status": "missing", "detail": msg})
+                first = first or msg
+            else:
+                results.append({"file": name, "status": "skipped", "detail": str(e)})
         except Mismatch as e:
             results.append({"file": name, "status": "mismatch", "detail": str(e)})
             first = first or str(e)
