@@ -148,11 +148,12 @@ def write_figure(cfg: RunConfig) -> Path:
     """Figure-2-style PNG of every baseline evaluated in this experiment directory (and the training curves of
     its models beside it, curves.png)."""
     from ..plotting import figure2
+    from ..tasks.base import cost_words
 
     write_curves(Path(cfg.exp_dir), f"{cfg.task.name} ({cfg.budget.name} budget, train seed {cfg.seed}): "
                  "training curves", RunDir(cfg).curves_file)
     return figure2(collect(Path(cfg.exp_dir), pipeline_command(cfg)), title(cfg).replace(": ", ":\n"),
-                   RunDir(cfg).figure2_file, err="ci95")
+                   RunDir(cfg).figure2_file, err="ci95", cost_words=cost_words(cfg.task))
 
 
 def _guard_inputs(cfg: RunConfig, program: str) -> tuple[list[str], dict[str, dict[int, float]]]:
@@ -270,6 +271,7 @@ def report(cfg: RunConfig) -> dict:
     writes only its report files."""
     from .. import seeds
     from ..plotting import figure2
+    from ..tasks.base import cost_words
 
     rc = cfg.report
     if rc.seed_files:
@@ -310,8 +312,9 @@ def report(cfg: RunConfig) -> dict:
                 n = len(by_task[next(iter(by_task))])
                 what = ("mean ± 95 % t-interval across training seeds" if n > 1 else
                         "1 training seed: mean ± 95 % t-interval over its evaluation seeds")
+                words = cost_words(cfg.task) if task == cfg.task.name else ""  # another task's runs: unknown
                 files.append(figure2(rows, f"{head}, {n} training seed{'s' if n > 1 else ''}:\n{what}",
-                                     out / REPORT_PNG, err="err"))
+                                     out / REPORT_PNG, err="err", cost_words=words))
                 curves = write_curves(out, f"{head}: training curves, {n} training seed{'s' if n > 1 else ''}",
                                       out / REPORT_CURVES)
                 files += [curves] if curves else []
