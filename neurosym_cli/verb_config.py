@@ -252,11 +252,11 @@ class ExportConfig:
     dir: str = ""
     """the export folder (empty: <exp_dir>/export/<baseline label>)"""
     formats: list[str] = field(default_factory=list)
-    """the policy's formats to write and check (POLICY_FORMATS; empty: all). A format named here that cannot be
-    written or checked (its package missing, its exporter failing) fails the command after the others are written;
-    one not named is one skipped line"""
+    """the policy's formats to write and check, of torchscript, pt2, onnx (empty: all). A format named here that
+    cannot be written or checked (its package missing, its exporter failing) fails the command after the others are
+    written; one not named is one skipped line"""
     onnx: str = "dynamo"
-    """the ONNX exporter (ONNX_EXPORTERS): dynamo, or legacy (TorchScript-based, deprecated upstream)"""
+    """the ONNX exporter: dynamo, or legacy (TorchScript-based, deprecated upstream)"""
 
     def __post_init__(self) -> None:
         _check(self.episodes >= 1, f"export.episodes must be at least 1, got {self.episodes}")

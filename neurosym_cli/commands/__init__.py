@@ -16,8 +16,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "rl": ("rl", "appendix D: whom to hear as actions, by policy gradient over a grid; picks rl1 and rl2"),
     "report": ("report", "one table, plots, training curves and the loss-degree Pareto front over training seeds"),
     "render": ("render", "one evaluation episode of a baseline as an animation (GIF/MP4) and a picture"),
-    "export": ("export", "a baseline's program as JSON, Python and C, its policy as TorchScript and ONNX, golden "
-                         "vectors; --check replays them without neurosym"),
+    "export": ("export", "a baseline's program as JSON, Python and C, its policy as TorchScript, torch.export (.pt2) "
+                         "and ONNX, golden vectors; --check replays them without neurosym"),
     "figures": ("figures", "the paper's figures 1, 3, 4, 5 from a run directory: attention, paths, rule regions"),
 }
 """command-line name -> (module and primary config name, one-line help)"""
