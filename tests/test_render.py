@@ -211,7 +211,7 @@ def test_a_swarm_size_render_samples_the_edges_it_draws(tmp_path):
             mask = rec.edges.mask(s, 0)
             assert scene.drawn == mask[scene.recv].sum() <= 25 * 2  # K = 2 rules
             assert scene.total == mask.sum() > 4 * scene.drawn
-            assert len(scene.edges.get_segments()) == scene.drawn
+            assert len(scene.links.lines.get_segments()) == len(scene.links.heads.get_paths()) == scene.drawn
     finally:
         scene.close()
     # a zoom: the axes show the window, and the receivers are sampled among the agents that start in it

@@ -1,7 +1,7 @@
 """A recorded episode as an animation (GIF; MP4 through ffmpeg) and as one static picture.
 
 Each frame: the goals, the agents (by group), their recent trails, and whom each agent hears at this step, drawn
-as a line from the heard agent to the listener: coloured by the rule that chose it for a program, with the
+as an arrow from the heard agent to the listener: coloured by the rule that chose it for a program, with the
 attention weight as opacity for soft attention, plain for the other masks. Agents that collide are ringed in
 red. The title line counts steps and gives the running loss and the max in- and out-degree of the step.
 """
@@ -18,8 +18,8 @@ from ..episode import EpisodeRecord
 from ..tasks.base import COST_WORDS
 from ..utils.io import atomic_file
 from .crowd import CrowdScene
-from .draw import (COLLISION_COLOR, EDGE_COLOR, RULE_COLORS, BlitScene, edge_handles, edge_segments, group_color,
-                   matplotlib_agg, save_figure, view_limits, window_note, wrap_title)
+from .draw import (COLLISION_COLOR, DIRECTION, EDGE_COLOR, RULE_COLORS, BlitScene, Links, edge_handles, edge_segments,
+                   group_color, head_size, matplotlib_agg, save_figure, view_limits, window_note, wrap_title)
 
 def edge_style(rec: EpisodeRecord, baseline) -> str:
     """How a frame draws a provider's edges: "rules" (coloured by rule, programs), "weights" (opacity = attention
@@ -34,7 +34,7 @@ def _edges(rec: EpisodeRecord, t: int, r: int, style: str):
     from matplotlib.colors import to_rgba
 
     i, j, w = rec.edges.at(t, r)
-    seg = edge_segments(rec.pos[t], i, j, shrink=0.04)
+    seg = edge_segments(rec.pos[t], i, j)
     if not len(seg):
         return seg, np.zeros((0, 4))
     if style == "rules":
@@ -72,16 +72,15 @@ class _Scene(BlitScene):
         # the moving parts are "animated": left out of the background, drawn over it frame by frame (blitting)
         self.trails = LineCollection([], colors=colors, lw=0.8, alpha=0.45, zorder=2, animated=True)
         ax.add_collection(self.trails)
-        self.edges = LineCollection([], lw=1.1, zorder=3, animated=True)
-        ax.add_collection(self.edges)
+        self.links = Links(ax, lw=1.1, zorder=3, head=head_size(xlim, ylim))
         self.agents = ax.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=26, c=colors, edgecolors="white",
                                  linewidths=0.5, zorder=4, animated=True)
         self.rings = ax.scatter([], [], s=90, facecolors="none", edgecolors=COLLISION_COLOR, linewidths=1.4,
                                 zorder=5, animated=True)
         self.text = ax.text(0.5, 1.015, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=8,
                             family="monospace", animated=True)
-        self.moving = (self.trails, self.edges, self.agents, self.rings, self.text)
-        self.fig.suptitle(wrap_title(title) + window_note(window), fontsize=8)
+        self.moving = (self.trails, *self.links.artists, self.agents, self.rings, self.text)
+        self.fig.suptitle(wrap_title(title) + f"\n{DIRECTION}" + window_note(window), fontsize=8)
         handles = [Line2D([], [], marker="o", ls="", color=colors[0], ms=5, label="agent"),
                    Line2D([], [], marker="x", ls="", color=goal_colors[0], ms=5, label="goal"),
                    Line2D([], [], marker="o", ls="", mfc="none", mec=COLLISION_COLOR, ms=8, label="collision")]
@@ -100,9 +99,7 @@ class _Scene(BlitScene):
         s = min(t, rec.steps - 1)  # communication of the step being taken (the last one at the end)
         lo = max(0, t - self.trail)
         self.trails.set_segments([rec.pos[lo:t + 1, i] for i in range(rec.n_agents)] if t > 0 else [])
-        seg, colors = _edges(rec, s, self.round, self.style)
-        self.edges.set_segments(seg)
-        self.edges.set_color(colors)
+        self.links.set(*_edges(rec, s, self.round, self.style))
         self.agents.set_offsets(rec.pos[t])
         hit = rec.collide[t - 1] if t > 0 else np.zeros(rec.n_agents, bool)
         self.rings.set_offsets(rec.pos[t][hit] if hit.any() else np.zeros((0, 2)))

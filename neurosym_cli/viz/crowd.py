@@ -12,8 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..episode import EpisodeRecord
-from .draw import (COLLISION_COLOR, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, edge_handles, edge_segments,
-                   group_color, in_window, matplotlib_agg, view_limits, window_note, wrap_title)
+from .draw import (COLLISION_COLOR, DIRECTION, EDGE_COLOR, GROUP_COLORS, RULE_COLORS, BlitScene, Links, edge_handles,
+                   edge_segments, group_color, head_size, in_window, matplotlib_agg, view_limits, window_note,
+                   wrap_title)
 
 
 def sample_receivers(n: int, count: int, seed: int, among: np.ndarray | None = None) -> np.ndarray:
@@ -62,19 +63,18 @@ class CrowdScene(BlitScene):
         ax.add_collection(self.trails)
         self.agents = ax.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=5, c=self.color, lw=0, zorder=3,
                                  animated=True)
-        self.edges = LineCollection([], lw=0.6, zorder=4, animated=True)
-        ax.add_collection(self.edges)
+        self.links = Links(ax, lw=0.6, zorder=4, head=head_size(xlim, ylim, share=0.008))
         self.marked = ax.scatter([], [], s=22, facecolors="none", edgecolors="black", linewidths=0.8, zorder=5,
                                  animated=True)
         self.rings = ax.scatter([], [], s=16, facecolors="none", edgecolors=COLLISION_COLOR, linewidths=0.7,
                                 zorder=5, animated=True)
         self.text = ax.text(0.5, 1.015, "", transform=ax.transAxes, ha="center", va="bottom", fontsize=8,
                             family="monospace", animated=True)
-        self.moving = (self.trails, self.agents, self.edges, self.marked, self.rings, self.text)
+        self.moving = (self.trails, self.agents, *self.links.artists, self.marked, self.rings, self.text)
         groups = sorted(set(rec.group.tolist())) if rec.labelled else [0]
         self.fig.suptitle(wrap_title(title) + f"\npoints: agents by group, trails: last {trail} steps (fading); "
-                          f"edges of {len(self.recv)} of {rec.n_agents} receivers sampled at random (ringed)"
-                          f"{window_note(window)}",
+                          f"edges of {len(self.recv)} of {rec.n_agents} receivers sampled at random (ringed), "
+                          f"{DIRECTION}{window_note(window)}",
                           fontsize=8)
         handles = [Line2D([], [], marker="o", ls="", color=GROUP_COLORS[g % len(GROUP_COLORS)], ms=4,
                           label=f"group {g}" if rec.labelled else "agent") for g in groups]
@@ -129,8 +129,7 @@ class CrowdScene(BlitScene):
         self.trails.set_color(colors)
         self.agents.set_offsets(pos)
         seg, colors = self._edges(s, pos)
-        self.edges.set_segments(seg)
-        self.edges.set_color(colors)
+        self.links.set(seg, colors)
         self.drawn, self.total = len(seg), rec.edges.count(s, self.round)
         self.marked.set_offsets(pos[self.recv] if len(self.recv) else np.zeros((0, 2)))
         hit = rec.collide[t - 1] if t > 0 else np.zeros(rec.n_agents, bool)

@@ -17,17 +17,22 @@ EDGE_COLOR = "#333333"
 COLLISION_COLOR = "#d62728"
 
 
+DIRECTION = "arrow j → i: agent i hears agent j"
+"""what a link's arrowhead means, said under every picture that draws links"""
+
+
 def edge_handles(style: str, picks) -> list:
-    """Legend entries of the edges a frame draws: one per rule ('rules'; ``picks`` (..., K) or None), else one
-    for every edge ('weights': opacity is the attention weight)."""
+    """Legend entries of the links a frame draws, each an arrow: one per rule ('rules'; ``picks`` (..., K) or
+    None), else one for every link ('weights': opacity is the attention weight)."""
     from matplotlib.lines import Line2D
+
+    def arrow(color: str, label: str) -> Line2D:
+        return Line2D([], [], color=color, marker=">", ms=4, label=label)
 
     if style == "rules":
         k = picks.shape[-1] if picks is not None else 0
-        return [Line2D([], [], color=RULE_COLORS[i % len(RULE_COLORS)], label=f"hears, by rule {i + 1}")
-                for i in range(k)]
-    return [Line2D([], [], color=EDGE_COLOR, label="hears (opacity: attention weight)" if style == "weights"
-                   else "hears")]
+        return [arrow(RULE_COLORS[i % len(RULE_COLORS)], f"hears, by rule {i + 1}") for i in range(k)]
+    return [arrow(EDGE_COLOR, "hears (opacity: attention weight)" if style == "weights" else "hears")]
 
 
 def matplotlib_agg():
@@ -87,14 +92,71 @@ def wrap_title(title: str) -> str:
     return f"{head}:\n{tail}" if sep else title
 
 
-def edge_segments(pos: np.ndarray, i: np.ndarray, j: np.ndarray, shrink: float = 0.0) -> np.ndarray:
-    """pos (N, 2), edges i hears j (E,) each -> segments (E, 2, 2) from j to i, ``shrink`` of their length cut
-    off each end."""
-    seg = np.stack([pos[j], pos[i]], 1).reshape(-1, 2, 2)  # from the speaker j to the listener i
-    if shrink and len(seg):
-        d = seg[:, 1] - seg[:, 0]
-        seg = seg + np.stack([d * shrink, -d * shrink], 1)
-    return seg
+def edge_segments(pos: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """pos (N, 2), edges i hears j (E,) each -> segments (E, 2, 2) from j to i."""
+    return np.stack([pos[j], pos[i]], 1).reshape(-1, 2, 2)  # from the speaker j to the listener i
+
+
+def _directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """segments (E, 2, 2) -> (unit directions (E, 2) from their first point to their second, lengths (E, 1))."""
+    d = seg[:, 1] - seg[:, 0]
+    length = np.linalg.norm(d, axis=1, keepdims=True)
+    return d / np.maximum(length, 1e-12), length
+
+
+def trim(seg: np.ndarray, gap: float) -> np.ndarray:
+    """segments (E, 2, 2) with ``gap`` world units (at most a quarter of each) cut off both ends: a link stops at
+    the edge of an agent's marker instead of under it."""
+    if not len(seg):
+        return seg
+    u, length = _directions(seg)
+    cut = u * np.minimum(gap, 0.25 * length)
+    return np.stack([seg[:, 0] + cut, seg[:, 1] - cut], 1)
+
+
+def arrow_heads(seg: np.ndarray, size: float) -> np.ndarray:
+    """segments (E, 2, 2) from speaker to listener -> triangles (E, 3, 2) with their tip at each segment's listener
+    end, pointing along it: ``size`` world units long (at most half the segment), half as wide."""
+    if not len(seg):
+        return np.zeros((0, 3, 2))
+    u, length = _directions(seg)
+    h = np.minimum(size, 0.5 * length)  # (E, 1)
+    base = seg[:, 1] - u * h
+    side = np.stack([-u[:, 1], u[:, 0]], 1) * h * 0.5
+    return np.stack([seg[:, 1], base + side, base - side], 1)
+
+
+class Links:
+    """Directed links on an axes: a line from the agent heard to the agent hearing it, an arrowhead at the hearer
+    (``head``: its length in world units; equal axes keep its shape), both ends trimmed by ``gap`` (default 0.4
+    head: about an agent marker's radius). ``animated``: for blitted frames."""
+
+    def __init__(self, ax, *, lw: float, zorder: float, head: float, gap: float | None = None,
+                 animated: bool = True):
+        from matplotlib.collections import LineCollection, PolyCollection
+
+        self.head, self.gap = head, 0.4 * head if gap is None else gap
+        self.lines = LineCollection([], lw=lw, zorder=zorder, animated=animated)
+        self.heads = PolyCollection([], lw=0, zorder=zorder, animated=animated)
+        ax.add_collection(self.lines)
+        ax.add_collection(self.heads)
+
+    @property
+    def artists(self) -> tuple:
+        return (self.lines, self.heads)
+
+    def set(self, seg: np.ndarray, colors) -> None:
+        """Show the links ``seg`` (E, 2, 2), speaker to listener, in ``colors`` (E, 4) RGBA, or one colour."""
+        seg = trim(seg, self.gap)
+        self.lines.set_segments(seg)
+        self.lines.set_color(colors)
+        self.heads.set_verts(arrow_heads(seg, self.head))
+        self.heads.set_facecolor(colors)
+
+
+def head_size(xlim, ylim, share: float = 0.018) -> float:
+    """An arrowhead's length in world units: ``share`` of the larger side of the view."""
+    return share * max(xlim[1] - xlim[0], ylim[1] - ylim[0])
 
 
 def save_figure(fig, path: Path) -> Path:

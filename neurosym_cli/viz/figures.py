@@ -24,8 +24,8 @@ from ..dsl.interpret import cond, linear
 from ..dsl.printer import describe, rule_text
 from ..tasks.features import FeatureMap
 from ..episode import EpisodeRecord
-from .draw import (GROUP_COLORS, RULE_COLORS, edge_segments, frame_limits, group_color, matplotlib_agg, save_figure,
-                   wrap_title)
+from .draw import (DIRECTION, GROUP_COLORS, RULE_COLORS, Links, edge_segments, frame_limits, group_color, head_size,
+                   matplotlib_agg, save_figure, wrap_title)
 
 
 def _order(rec: EpisodeRecord) -> np.ndarray:
@@ -127,10 +127,10 @@ def _scene(ax, rec: EpisodeRecord, step: int | None = None, round_: int = 0, gro
             ax.plot(rec.pos[:, i, 0], rec.pos[:, i, 1], color=colors[i], lw=0.7, alpha=0.6)
     if step is not None:
         i, j, _ = rec.edges.at(step, round_)
-        seg = edge_segments(rec.pos[step], i, j, shrink=0.03)
-        from matplotlib.collections import LineCollection
+        seg = edge_segments(rec.pos[step], i, j)
+        from matplotlib.colors import to_rgba
 
-        ax.add_collection(LineCollection(seg, colors="#333333", lw=0.7, alpha=0.6))
+        Links(ax, lw=0.7, zorder=2, head=head_size(xlim, ylim), animated=False).set(seg, [to_rgba("#333333", 0.6)])
     ax.scatter(rec.pos[0, :, 0], rec.pos[0, :, 1], s=18, facecolors="none", edgecolors=colors, lw=0.9)
     ax.scatter(rec.pos[-1, :, 0], rec.pos[-1, :, 1], s=14, c=colors)
     goal_colors = colors if rec.labelled else ["#555555"] * len(rec.goal)
@@ -147,8 +147,8 @@ def figure1(full: tuple[str, EpisodeRecord], prog: tuple[str, EpisodeRecord], pa
     plt = matplotlib_agg()
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), dpi=110, gridspec_kw={"width_ratios": [1.5, 1, 1]})
     _scene(axes[0], prog[1], step=0)
-    axes[0].set_title(f"(a) {prog[0]}: starts (open), goals (x), group paths;\nlines: whom each agent hears at "
-                      f"step 0", fontsize=8)
+    axes[0].set_title(f"(a) {prog[0]}: starts (open), goals (x), group paths;\nwhom each agent hears at step 0, "
+                      f"{DIRECTION}", fontsize=8)
     for ax, (label, rec), tag in ((axes[1], full, "(b)"), (axes[2], prog, "(c)")):
         im = attention_panel(ax, rec, 0, 0, f"{tag} {label}, step 0")
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.03).ax.tick_params(labelsize=6)
