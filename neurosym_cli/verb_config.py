@@ -82,8 +82,8 @@ class SelectConfig:
     features: list[str] = field(default_factory=lambda: ["v1", "v2"])
     """feature maps of the grid"""
     finalists: int = 3
-    """at most this many programs, the validation-best and those statistically similar to it (lowest degree
-    first), are retrained and validated again before the choice"""
+    """retrained and validated again before the choice: of the programs statistically similar to the validation-best
+    (itself included), this many of lowest degree (the best only when fewer similar ones have a lower degree)"""
     jobs: int = 0
     """programs searched at once, one process and one thread each; 0 = one per CPU"""
 

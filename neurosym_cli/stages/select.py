@@ -3,8 +3,9 @@
     1. search a program for every grid point (one shared oracle dataset D; reused when it exists);
     2. evaluate each program (prog: the oracle under it) on the validation seeds (``budget.val_seeds``, episodes
        from their own stream, never a test episode);
-    3. finalists: the validation-best and the programs statistically similar to it (``choose``), lowest degree
-       first, at most ``select.finalists``; retrain each and evaluate it on the validation seeds again;
+    3. finalists: of the programs statistically similar to the validation-best (``choose``; itself included), the
+       ``select.finalists`` of lowest degree (the best only when fewer similar ones have a lower degree); retrain
+       each and evaluate it on the validation seeds again;
     4. the choice among the retrained finalists by the same rule, written to select/selected.json;
     5. only then the chosen program's test evaluation (prog and prog-retrained, the usual eval directories).
 
