@@ -47,6 +47,8 @@ EXTRA = "neurosym tune needs the tune extra: pip install -e '.[tune]' in the neu
         "optuna cmaes)"
 WAIT = 10.0
 """seconds between looks at a program or model another process is making (its lock, utils/lock.Busy)"""
+CREATE_TRIES = 5
+"""attempts at opening a database whose tables another process is creating at the same moment"""
 FAILS_IN_A_ROW = 3
 """trials of this process that may fail one after another before the command stops with the last one's line"""
 RULE = ("lowest mean validation loss after retraining; among the retrained trials whose paired 95% interval of the "
@@ -128,10 +130,13 @@ def shown(url: str) -> str:
 
 def open_storage(optuna, url: str):
     """Optuna's RDB storage of ``url``, with heartbeats (a killed process's trials are failed and run again) and a
-    minute's patience with a locked SQLite file; one line when it cannot be opened."""
+    minute's patience with a locked SQLite file; one line when it cannot be opened. Processes that open a new
+    database at once race to create its tables (one finds a table made, or a row written, under it): the loser
+    opens it again, as it does a server that does not answer yet."""
     from pathlib import Path
 
     from optuna import storages
+    from sqlalchemy.exc import IntegrityError, OperationalError
 
     retry = ({"heartbeat_stale_trial_callback": storages.RetryHeartbeatStaleTrialCallback(max_retry=2)}
              if hasattr(storages, "RetryHeartbeatStaleTrialCallback")  # optuna >= 4.9; before: failed_trial_callback
@@ -143,8 +148,14 @@ def open_storage(optuna, url: str):
         sqlite = parsed.get_backend_name() == "sqlite"
         if sqlite and parsed.database not in (None, "", ":memory:"):
             Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
-        return storages.RDBStorage(url, engine_kwargs={"connect_args": {"timeout": 60}} if sqlite else {},
-                                   heartbeat_interval=60, grace_period=180, **retry)
+        for attempt in range(CREATE_TRIES):
+            try:
+                return storages.RDBStorage(url, engine_kwargs={"connect_args": {"timeout": 60}} if sqlite else {},
+                                           heartbeat_interval=60, grace_period=180, **retry)
+            except (IntegrityError, OperationalError):  # another process's tables half made, or no answer yet
+                if attempt + 1 == CREATE_TRIES:
+                    raise
+                time.sleep(0.5 * (attempt + 1))
     except Exception as e:  # a bad URL, a missing driver, a server that does not answer: the input's
         first = (str(e).strip().splitlines() or [type(e).__name__])[0]
         raise UserError(f"tune.storage={shown(url)} cannot be opened ({type(e).__name__}: {first}); give an "
