@@ -126,6 +126,35 @@ def test_a_trial_worse_than_the_median_is_pruned_before_retraining(tmp_path, mon
     assert study.get_trials()[1].intermediate_values == {0: pytest.approx(5.0)}
 
 
+def test_a_trial_waits_for_a_program_another_process_is_making(tmp_path, monkeypatch):
+    """Two workers that draw the same program: the second waits for the first's lock, then reuses its result."""
+    import threading
+
+    import neurosym_cli.stages.tune as tune
+    from neurosym_cli.utils.lock import run_lock
+
+    monkeypatch.setattr(tune, "WAIT", 0.05)
+    where, calls, held, release = tmp_path / "synth/k1-lam0.5-v1", [], threading.Event(), threading.Event()
+
+    def job(cfg, info):
+        calls.append(1)
+        with run_lock(where):
+            return {"made": True}
+
+    def other_process():
+        with run_lock(where):
+            held.set()
+            release.wait(10)
+
+    t = threading.Thread(target=other_process)
+    t.start()
+    held.wait(10)
+    threading.Timer(0.3, release.set).start()
+    assert tune._when_free(job, None, None) == {"made": True}
+    t.join()
+    assert len(calls) >= 2  # refused (Busy) while the other held it, then made
+
+
 def test_a_missing_optuna_or_a_bad_storage_is_one_line(tmp_path, monkeypatch):
     from neurosym_cli.errors import UserError
     from neurosym_cli.stages import RunInfo
