@@ -18,7 +18,6 @@ TRACKERS = [t for t in ("mlflow", "wandb") if importlib.util.find_spec(t)]
 COMBINED = "+".join(["tensorboard"] * bool(importlib.util.find_spec("tensorboard")) + TRACKERS)
 """the pipeline's logger=: every tracker installed here at once"""
 EXP = "random-grid/tiny/seed0"
-TAG = "k2-lam0.5-v1"
 
 
 def _csv(path: Path) -> list[dict]:
@@ -38,10 +37,16 @@ def _mlflow_runs(root: Path) -> dict:
     return client, {(r.info.lifecycle_stage, r.data.tags["neurosym.run"]): r for r in runs}
 
 
+def _tag(tracked: Path) -> str:
+    """The program's tag (k2-lam0.5-v1 and the search's non-default settings), read from the run directory."""
+    return next((tracked / EXP / "synth").glob("*/program.txt")).parent.name
+
+
 def _check_mlflow(tracked: Path) -> None:
     """Every stage of the pipeline is one finished MLflow run with its tags, config, steps, summary and files."""
+    tag = _tag(tracked)
     client, runs = _mlflow_runs(tracked)
-    assert sorted(k for _, k in runs) == [f"{EXP}/eval-prog-{TAG}", f"{EXP}/synth-{TAG}", f"{EXP}/train-oracle"]
+    assert sorted(k for _, k in runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/synth-{tag}", f"{EXP}/train-oracle"]
     train = runs["active", f"{EXP}/train-oracle"]
     assert train.info.status == "FINISHED"
     assert {k: train.data.tags[k] for k in ("task", "budget", "baseline", "scheme", "seed", "stage")} == {
@@ -57,19 +62,18 @@ def _check_mlflow(tracked: Path) -> None:
     assert [m.value for m in loss] == pytest.approx([float(h["loss"]) for h in hist])
     assert {a.path for a in client.list_artifacts(train.info.run_id)} == {"history.csv", "manifest.json"}
 
-    synth = runs["active", f"{EXP}/synth-{TAG}"]
+    synth = runs["active", f"{EXP}/synth-{tag}"]
     assert synth.data.tags["stage"] == "synth" and synth.data.tags["scheme"] == "prog"
-    best = client.get_metric_history(synth.info.run_id, "search/best")
-    assert len(best) == 30  # every MCMC proposal of the tiny budget
-    trace = _csv(tracked / EXP / f"synth/{TAG}/trace.csv")
-    assert sorted(best, key=lambda m: m.step)[-1].value == pytest.approx(float(trace[-1]["best"]))
+    best = sorted(client.get_metric_history(synth.info.run_id, "search/best"), key=lambda m: m.step)
+    trace = _csv(tracked / EXP / f"synth/{tag}/trace.csv")
+    assert [m.value for m in best] == pytest.approx([float(r["best"]) for r in trace])  # every proposal
     arts = {a.path for a in client.list_artifacts(synth.info.run_id)}
     assert {"program.txt", "summary.json", "trace.csv"} <= arts
     program = Path(client.download_artifacts(synth.info.run_id, "program.txt", str(tracked / "dl")))
-    assert program.read_text() == (tracked / EXP / f"synth/{TAG}/program.txt").read_text()
+    assert program.read_text() == (tracked / EXP / f"synth/{tag}/program.txt").read_text()
 
-    ev = runs["active", f"{EXP}/eval-prog-{TAG}"]
-    metrics = json.loads((tracked / EXP / f"eval/prog-{TAG}/metrics.json").read_text())["summary"]
+    ev = runs["active", f"{EXP}/eval-prog-{tag}"]
+    metrics = json.loads((tracked / EXP / f"eval/prog-{tag}/metrics.json").read_text())["summary"]
     assert ev.data.metrics["eval/cost/mean"] == pytest.approx(metrics["cost"]["mean"])
     assert ev.data.metrics["eval/cost/ci95"] == pytest.approx(metrics["cost"]["ci95"])
     assert {"metrics.json", "metrics.csv"} <= {a.path for a in client.list_artifacts(ev.info.run_id)}
@@ -77,10 +81,11 @@ def _check_mlflow(tracked: Path) -> None:
 
 def _check_mlflow_eval_again(tracked: Path) -> None:
     """`neurosym eval` again replaces the pipeline's evaluation run (deleted, restorable) and keeps its figures."""
+    tag = _tag(tracked)
     run(["eval", "budget=tiny", "task=random-grid", "threads=1", "baseline=prog", "logger=mlflow"], tracked,
         plots=True)
     client, runs = _mlflow_runs(tracked)
-    key = f"{EXP}/eval-prog-{TAG}"
+    key = f"{EXP}/eval-prog-{tag}"
     assert ("deleted", key) in runs and sum(k == key for s, k in runs if s == "active") == 1
     again = runs["active", key]
     assert {"metrics.json", "figure2.png", "curves.png"} <= {a.path for a in client.list_artifacts(again.info.run_id)}
@@ -110,12 +115,17 @@ def _records(path: Path) -> list:
     return out
 
 
+def _run_record(path: Path):
+    """The run record (id, name, group, job type, tags, config) of one W&B transaction log."""
+    return next(r.run for r in _records(path) if r.WhichOneof("record_type") == "run")
+
+
 def _wandb_runs(root: Path) -> dict:
     """job type -> (run record, [history rows], summary, files saved) of every offline run under ``root``."""
     runs = {}
     for f in sorted((root / "wandb").glob("offline-run-*/run-*.wandb")):
         recs = _records(f)
-        head = next(r.run for r in recs if r.WhichOneof("record_type") == "run")
+        head = _run_record(f)
         rows = [{i.nested_key[0] if i.nested_key else i.key: json.loads(i.value_json) for i in r.history.item}
                 for r in recs if r.WhichOneof("record_type") == "history"]
         summary = {u.key or "/".join(u.nested_key): json.loads(u.value_json)
@@ -127,8 +137,9 @@ def _wandb_runs(root: Path) -> dict:
 
 def _check_wandb(tracked: Path) -> None:
     """Every stage of the pipeline is one offline W&B run with its group, config, steps, summary and files."""
+    tag = _tag(tracked)
     runs = _wandb_runs(tracked)
-    assert sorted(runs) == [f"{EXP}/eval-prog-{TAG}", f"{EXP}/synth-{TAG}", f"{EXP}/train-oracle"]
+    assert sorted(runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/synth-{tag}", f"{EXP}/train-oracle"]
     head, rows, summary, files, folder = runs[f"{EXP}/train-oracle"]
     assert head.job_type == "train" and head.run_group == f"{EXP}/tf-full" and head.project == "neurosym"
     assert {"random-grid", "tiny", "tf-full", "0", "train"} <= set(head.tags)
@@ -141,14 +152,16 @@ def _check_wandb(tracked: Path) -> None:
         (tracked / EXP / "train/oracle/manifest.json").read_text())["final_loss"])
     assert {"history.csv", "manifest.json"} <= set(files)
 
-    head, rows, summary, files, folder = runs[f"{EXP}/synth-{TAG}"]
-    assert head.job_type == "synth" and len([r for r in rows if "search/best" in r]) == 30
+    head, rows, summary, files, folder = runs[f"{EXP}/synth-{tag}"]
+    trace = _csv(tracked / EXP / f"synth/{tag}/trace.csv")
+    assert head.job_type == "synth"
+    assert [r["search/best"] for r in rows if "search/best" in r] == pytest.approx([float(r["best"]) for r in trace])
     assert "program.txt" in files
-    assert (folder / "files/program.txt").read_text() == (tracked / EXP / f"synth/{TAG}/program.txt").read_text()
+    assert (folder / "files/program.txt").read_text() == (tracked / EXP / f"synth/{tag}/program.txt").read_text()
 
-    head, rows, summary, files, folder = runs[f"{EXP}/eval-prog-{TAG}"]
-    assert head.run_group == f"{EXP}/prog-{TAG}" and head.job_type == "eval"
-    metrics = json.loads((tracked / EXP / f"eval/prog-{TAG}/metrics.json").read_text())["summary"]
+    head, rows, summary, files, folder = runs[f"{EXP}/eval-prog-{tag}"]
+    assert head.run_group == f"{EXP}/prog-{tag}" and head.job_type == "eval"
+    metrics = json.loads((tracked / EXP / f"eval/prog-{tag}/metrics.json").read_text())["summary"]
     assert summary["eval/cost/mean"] == pytest.approx(metrics["cost"]["mean"])
     assert {"metrics.json", "metrics.csv"} <= set(files)
     assert not list(Path(tracked).glob("*.wandb"))  # every file under <runs_root>/wandb
@@ -158,14 +171,31 @@ def test_a_tracked_pipeline_lands_in_every_installed_store(tmp_path):
     """One tiny pipeline (train, synth, eval of prog) tracked by every tracker installed here at once."""
     if not TRACKERS:
         pytest.skip("neither mlflow nor wandb is installed (pip install -e '.[mlflow,wandb]')")
-    run(["pipeline", "budget=tiny", "task=random-grid", "threads=1", "baselines=[prog]", f"logger={COMBINED}"],
-        tmp_path, timeout=600)
+    run(["pipeline", "budget=tiny", "task=random-grid", "threads=1", "baselines=[prog]", "pipeline.select=none",
+         f"logger={COMBINED}"], tmp_path, timeout=600)
     if "mlflow" in TRACKERS:
         _check_mlflow(tmp_path)
     if "wandb" in TRACKERS:
         _check_wandb(tmp_path)
     if "mlflow" in TRACKERS:
         _check_mlflow_eval_again(tmp_path)
+    _check_resume(tmp_path)
+
+
+def _check_resume(tracked: Path) -> None:
+    """A training extended from its checkpoint (steps 3, 4 after 1, 2) continues its tracked run."""
+    run(["train", "budget=tiny", "task=random-grid", "threads=1", "budget.train_rollouts=16",
+         f"logger={'+'.join(TRACKERS)}"], tracked)
+    key = f"{EXP}/train-oracle"
+    if "mlflow" in TRACKERS:
+        client, runs = _mlflow_runs(tracked)
+        assert [s for s, k in runs if k == key] == ["active"]
+        loss = client.get_metric_history(runs["active", key].info.run_id, "train/loss")
+        assert sorted(m.step for m in loss) == [1, 2, 3, 4]
+    if "wandb" in TRACKERS:
+        ids = {_run_record(f).run_id for f in (tracked / "wandb").glob("offline-run-*/run-*.wandb")
+               if _run_record(f).display_name == key}
+        assert len(ids) == 1 and len(list((tracked / "wandb").glob(f"offline-run-*-{ids.pop()}"))) == 2
 
 
 # --- missing packages ---------------------------------------------------------------------------------------------
