@@ -13,7 +13,7 @@ from ..baselines import ORACLE
 from ..schemes import with_run
 from ..config import RunConfig
 from ..run import RunDir, pipeline_command
-from ..utils.console import clock, log, say
+from ..utils.console import clock, left_text, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
@@ -38,6 +38,72 @@ def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage, program: str = "")
         cfg = dataclasses.replace(cfg, synth=dataclasses.replace(cfg.synth, front=True))
     program = program if stage.verb != "synth" and b.has_program else ""
     return dataclasses.replace(cfg, cmd=stage.verb, baseline=b, program=program), RunInfo(info.multirun, info.log_dir)
+
+
+WEIGHTS = {"train": 1.0, "retrain": 1.0, "synth": 0.05, "eval": 1.5}
+"""rough seconds of one unit of a verb's work (stage_units), in seconds of one training rollout (the quick and paper
+budgets' pipeline_timings.json: a retraining rollout costs about what a training one does, a search step about a
+twentieth, an evaluation seed one and a half): what the time left assumes for a verb none of whose stages has run"""
+
+
+def stage_units(cfg: RunConfig, stage: Stage) -> float:
+    """The work of one stage of ``cfg``'s plan in its verb's units: training or retraining rollouts, search steps
+    (all rounds), evaluation seeds; 0 for a stage whose artifact is there already (a finished training's manifest,
+    a search's summary: it is reused; an evaluation always runs)."""
+    from ..config import UserError
+
+    b = cfg.budget
+    try:
+        run = RunDir(cfg)
+        made = {"train": run.manifest_file, "retrain": run.manifest_file, "synth": run.summary_file}.get(stage.verb)
+        if made is not None and made.exists():
+            return 0.0
+    except (UserError, OSError):  # a program file not there yet: the stage will say so; count its work
+        pass
+    return {"train": b.train_rollouts, "retrain": b.retrain_rollouts, "synth": b.mcmc_steps * cfg.task.rounds,
+            "eval": b.eval_seeds}[stage.verb]
+
+
+class PipelineClock:
+    """The pipeline's time left: each remaining stage's units (stage_units) at the seconds per unit measured on this
+    run's stages of the same verb; else the time the same stage took when this run directory's pipeline last ran
+    it (pipeline_timings.json); else the pace of the verbs measured so far scaled by WEIGHTS. A stage that took
+    under a second (a reused artifact) measures nothing; None while a stage has none of these."""
+
+    def __init__(self) -> None:
+        self.spent: dict[str, tuple[float, float]] = {}  # verb -> (seconds, units) of its stages that did work
+
+    def done(self, verb: str, units: float, seconds: float) -> None:
+        if units > 0 and seconds >= 1.0:
+            s, u = self.spent.get(verb, (0.0, 0.0))
+            self.spent[verb] = (s + seconds, u + units)
+
+    def rate(self, verb: str) -> float | None:
+        """Seconds per unit of ``verb``'s work."""
+        if verb in self.spent:
+            s, u = self.spent[verb]
+            return s / u
+        if not self.spent:
+            return None
+        per_weight = sum(s for s, _ in self.spent.values()) / sum(u * WEIGHTS[v] for v, (_, u) in self.spent.items())
+        return per_weight * WEIGHTS[verb]
+
+    def left(self, remaining: list[tuple[str, float, float | None]]) -> float | None:
+        """Seconds left for the stages still to run, each (verb, units, the seconds it took before or None)."""
+        total = 0.0
+        for verb, units, before in remaining:
+            if units <= 0:
+                continue
+            rate = self.rate(verb) if verb in self.spent or before is None else None
+            if rate is None and before is None:
+                return None
+            total += units * rate if rate is not None else before
+        return total
+
+
+def timing_name(stage: Stage, cfg: RunConfig) -> str:
+    """A stage's key in pipeline_timings.json: its name, and the program it runs under (a front pick's own)."""
+    return stage.name + (f" {Path(cfg.program).stem}" if cfg.program else "")
 
 
 def _trained_seconds(history: Path) -> float:
@@ -66,19 +132,22 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     timings = read_json(timing_file, pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
+    pace = PipelineClock()
 
     def run(stage: Stage, program: str = "") -> dict:
         """One stage on the pipeline's config (``program``: a program baseline's file), its wall time kept."""
         stage_cfg, stage_info = stage_config(cfg, info, stage, program)
         # stages print no intermediate tables or live views' final renders; the pipeline prints the final table
         stage_info.multirun = info.multirun or stage.verb == "eval"
+        units = stage_units(stage_cfg, stage)
         start = time.perf_counter()
         result = RUNNERS[stage.verb](stage_cfg, stage_info)
         took = time.perf_counter() - start
+        pace.done(stage.verb, units, took)
         if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
             took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
         # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
-        name = stage.name + (f" {Path(stage_cfg.program).stem}" if stage_cfg.program else "")  # a pick's own
+        name = timing_name(stage, stage_cfg)
         timings[name] = round(took if stage.verb == "eval" else max(took, timings.get(name, 0.0)), 1)
         write_json(timing_file, timings)
         return result
@@ -91,16 +160,29 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     elif cfg.pipeline.select == "front":
         log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
                     "program; the front is not chosen among")
+    def program_of(stage: Stage) -> str:
+        return chosen if stage.baseline in FRONT_RUNS else ""
+
+    def remaining(todo: list[Stage]) -> list[tuple[str, float, float | None]]:
+        out = []
+        for s in todo:
+            c = stage_config(cfg, info, s, program_of(s))[0]
+            out.append((s.verb, stage_units(c, s), timings.get(timing_name(s, c))))
+        return out
+
     for k, stage in enumerate(stages, start=1):
-        log.info("pipeline stage %d/%d: %s (%s elapsed)", k, len(stages), stage.name,
-                 clock(time.perf_counter() - t0))
-        results[f"{stage.verb}:{stage.baseline}"] = run(stage, chosen if stage.baseline in FRONT_RUNS else "")
+        left = pace.left(remaining(stages[k - 1:]))
+        log.info("pipeline stage %d/%d: %s (%s elapsed, %s left%s)", k, len(stages), stage.name,
+                 clock(time.perf_counter() - t0), left_text(left),
+                 "" if left is not None else ": measured once a stage has run")
+        results[f"{stage.verb}:{stage.baseline}"] = run(stage, program_of(stage))
     print_table(cfg, program=chosen)
     from ..config import UserError
     from .render import make_figures
 
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
         if cfg.plots:  # of the program prog-retrained ran under (the front's pick, under pipeline.select=front)
+            log.info("pipeline: the figures (%s elapsed)", clock(time.perf_counter() - t0))
             make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)

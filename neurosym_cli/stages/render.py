@@ -11,7 +11,7 @@ from ..config import ConfigError, RunConfig, UserError
 from ..episode import EpisodeRecord, protocol_episode, record_episode
 from ..policy.protocol import unwrap
 from ..tasks import make_task
-from ..utils.console import log, say
+from ..utils.console import Parts, log, say
 from ..utils.io import ArtifactError
 from ..utils.device import resolve_device
 from ..utils.seeding import seed_everything
@@ -103,17 +103,23 @@ def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
     return dataclasses.replace(cfg, baseline=b, program=cfg.program if b.has_program else "")
 
 
-def _records(cfg: RunConfig, names: list[str], episode: int) -> list[tuple[str, EpisodeRecord]]:
-    """(label, record) of each baseline that exists in the run directory; the missing ones are logged."""
+def _records(cfg: RunConfig, names: list[str], episode: int,
+             memo: dict | None = None) -> list[tuple[str, EpisodeRecord]]:
+    """(label, record) of each baseline that exists in the run directory; the missing ones are logged. ``memo``:
+    (name, episode) -> what was recorded before (None: missing), so that a figure reuses another's episode (a
+    recording is the same each time: the protocol's episode, from the seed)."""
+    memo = {} if memo is None else memo
     out = []
     for name in names:
-        b = _with_baseline(cfg, name)
-        try:
-            rec, _ = record(b, episode)
-        except UserError as e:
-            log.info("figures: no %s here, drawn without it (%s)", name, e)
-            continue
-        out.append((RunDir(b).label, rec))
+        if (name, episode) not in memo:
+            b = _with_baseline(cfg, name)
+            try:
+                memo[name, episode] = (RunDir(b).label, record(b, episode)[0])
+            except UserError as e:
+                log.info("figures: no %s here, drawn without it (%s)", name, e)
+                memo[name, episode] = None
+        if memo[name, episode] is not None:
+            out.append(memo[name, episode])
     return out
 
 
@@ -143,30 +149,38 @@ def make_figures(cfg: RunConfig, info: RunInfo) -> dict:
     step = cfg.render.step
     task = make_task(cfg.task, cfg.horizon)
     tag = RunDir(_with_baseline(cfg, "prog")).program_tag  # the pictures of programs name the program they show
-    recs = _records(cfg, list(cfg.render.baselines), cfg.episode)
+    settings = _setting_episodes(cfg)
+    figure1 = bool(getattr(task, "figure1", False)) and settings is not None  # the task asks for the paper's Figure 1
+    parts = Parts(f"figures {cfg.task.name}", 2 + (settings is not None) + figure1)  # recording episodes is most
+    memo: dict = {}  # (baseline, episode) -> its recorded episode, shared by the figures
+    parts.begin(f"attention maps, episode {cfg.episode} of {', '.join(cfg.render.baselines)}")
+    recs = _records(cfg, list(cfg.render.baselines), cfg.episode, memo)
     # the program's rules, drawn on the episode of the retrained model (else of the oracle under the program)
-    prog = _records(cfg, ["prog-retrained"], cfg.episode) or _records(cfg, ["prog"], cfg.episode)
+    prog = _records(cfg, ["prog-retrained"], cfg.episode, memo) or _records(cfg, ["prog"], cfg.episode, memo)
     if recs or prog:  # before anything is drawn
         check_in_episode(cfg, (recs or prog)[0][1])
     if recs:
         made["attention"] = str(fig.attention_maps(recs, step, run.figure_file(ATTENTION, tag, episode=cfg.episode),
                                                    f"{head}: attention at episode {cfg.episode}"))
-    settings = _setting_episodes(cfg)
     if settings is not None:
+        parts.begin(f"trajectories of prog-retrained and dist, episodes {', '.join(map(str, dict.fromkeys(settings)))}")
         panels = []
         for k in dict.fromkeys(settings):  # the two episodes (one if they coincide)
-            pair = _records(cfg, ["prog-retrained", "dist"], k)
+            pair = _records(cfg, ["prog-retrained", "dist"], k, memo)
             if pair:
                 groups = len(set(pair[0][1].group.tolist()))
                 panels.append((f"episode {k}: {groups} group(s), N = {pair[0][1].n_agents}", pair))
         if panels:
             made["trajectories"] = str(fig.trajectories(panels, run.figure_file(TRAJECTORIES, tag),
                                                         f"{head}: group paths, prog-retrained solid, dist dashed"))
-    if getattr(task, "figure1", False) and settings is not None:  # the task asks for the paper's Figure 1
-        full, prog = _records(cfg, ["tf-full"], settings[0]), _records(cfg, ["prog-retrained"], settings[0])
-        if full and prog:
-            made["figure1"] = str(fig.figure1(full[0], prog[0], run.figure_file(FIGURE1, tag),
+    if figure1:
+        parts.begin(f"Figure 1, episode {settings[0]}")
+        full = _records(cfg, ["tf-full"], settings[0], memo)
+        prog1 = _records(cfg, ["prog-retrained"], settings[0], memo)  # its own name: prog stays cfg.episode's
+        if full and prog1:
+            made["figure1"] = str(fig.figure1(full[0], prog1[0], run.figure_file(FIGURE1, tag),
                                               f"{head}: Figure 1, episode {settings[0]}"))
+    parts.begin(f"the program's rule regions, episode {cfg.episode}")
     if prog:
         prog_cfg = _with_baseline(cfg, "prog-retrained" if prog[0][0].startswith("prog-retrained") else "prog")
         label, rec = prog[0]

@@ -7,7 +7,7 @@ import time
 from typing import Mapping, Sequence
 
 import rich
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
@@ -54,22 +54,76 @@ def use_rich(mode: str, multirun: bool) -> bool:
     return console.is_terminal and not multirun
 
 
+class Eta:
+    """Time left of a loop of ``total`` steps, from the times its steps took. The steps up to ``start + warmup``
+    are left out (the first one compiles kernels and fills caches: 10 times a later one is common), and the time
+    per step is a running mean that weighs recent steps more (the n-th step measured weighs max(2 / (n + 1),
+    ``floor``)): exact while the pace is steady after the warm-up, and following a pace that drifts (a search's
+    final phase on the whole dataset, a machine that got busier). Steps may be reported one by one or in jumps."""
+
+    def __init__(self, total: int, start: int = 0, warmup: int = 1, floor: float = 0.05, now: float | None = None):
+        self.total, self.floor, self.warm_until = total, floor, start + warmup
+        self.last = (start, time.perf_counter() if now is None else now)  # (step, perf_counter seconds)
+        self.per_step: float | None = None  # seconds
+        self.measured = 0  # steps measured (after the warm-up)
+
+    def update(self, step: int, now: float | None = None) -> float | None:
+        """Record that ``step`` steps are done at ``now`` (perf_counter seconds); returns the seconds left, None
+        while nothing after the warm-up was measured."""
+        now = time.perf_counter() if now is None else now
+        last_step, last_time = self.last
+        if step > last_step:
+            self.last = (step, now)
+            if last_step >= self.warm_until:  # an interval holding a warm-up step is never measured
+                n = step - last_step
+                x = (now - last_time) / n
+                weight = 1 - (1 - max(2 / (self.measured + 2), self.floor)) ** n
+                self.per_step = x if self.per_step is None else self.per_step + weight * (x - self.per_step)
+                self.measured += n
+        return self.left(step)
+
+    def left(self, step: int) -> float | None:
+        """Seconds left after ``step`` steps, or None before the pace is known."""
+        return None if self.per_step is None else self.per_step * max(self.total - step, 0)
+
+
+def left_text(seconds: float | None) -> str:
+    """Time left as m:ss (or h:mm:ss), '?' while it is not known yet (the warm-up)."""
+    return "?" if seconds is None else clock(seconds)
+
+
+class Parts:
+    """Progress of a phase made of a few named parts (the figures): one line as each begins, with its count, the
+    time elapsed and, from the second part on, the time left at the mean pace of the parts done."""
+
+    def __init__(self, label: str, total: int):
+        self.label, self.total, self.done, self.t0 = label, total, 0, time.perf_counter()
+
+    def begin(self, what: str) -> None:
+        elapsed = time.perf_counter() - self.t0
+        left = elapsed / self.done * (self.total - self.done) if self.done else None
+        self.done += 1
+        log.info("%s %d/%d: %s (%s elapsed, %s left)", self.label, self.done, self.total, what, clock(elapsed),
+                 left_text(left))
+
+
 class ProgressReporter:
-    """Shows training progress: a rich bar with the loss, or a plain line every ``log_every`` steps."""
+    """Shows training progress: a rich bar with the loss, or a plain line every ``log_every`` steps; time left
+    from ``Eta`` (warm-up left out)."""
 
     def __init__(self, label: str, rich: bool, log_every: int):
         self.label, self.rich, self.log_every = label, rich, log_every
         self.progress: Progress | None = None
         self.task = None
         self.t0 = time.perf_counter()
-        self.first_step: int | None = None
+        self.eta: Eta | None = None
 
     def __enter__(self) -> "ProgressReporter":
         if self.rich:
             self.progress = Progress(
                 TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TextColumn("steps"),
-                TextColumn("{task.fields[info]}"), TextColumn("elapsed"), TimeElapsedColumn(), TextColumn("left"),
-                TimeRemainingColumn(), console=console,
+                TextColumn("{task.fields[info]}"), TextColumn("elapsed"), TimeElapsedColumn(),
+                TextColumn("left {task.fields[left]}"), console=console,
             )
             self.progress.start()
         return self
@@ -81,16 +135,16 @@ class ProgressReporter:
     def update(self, step: int, total: int, metrics: Mapping[str, float]) -> None:
         shown = {"rollouts": "rollouts", "loss": "loss", "degree": "max in+out", "grad_norm": "grad_norm"}
         info = "  ".join(f"{shown[k]} {_fmt(v)}" for k, v in metrics.items() if k in shown)
-        if self.first_step is None:
-            self.first_step = step - 1  # a resumed run: time left is measured from the steps of this run
+        if self.eta is None:  # a resumed run: time left is measured from the steps of this run
+            self.eta = Eta(total, start=step - 1, now=self.t0)
+        left = left_text(self.eta.update(step))
         if self.progress is not None:
             if self.task is None:
-                self.task = self.progress.add_task(self.label, total=total, completed=step - 1, info="")
-            self.progress.update(self.task, completed=step, info=info)
+                self.task = self.progress.add_task(self.label, total=total, completed=step - 1, info="", left="?")
+            self.progress.update(self.task, completed=step, info=info, left=left)
         elif step % self.log_every == 0 or step == total or step == 1:
             elapsed = time.perf_counter() - self.t0
-            log.info("%s step %d/%d  %s  (%s elapsed, %s left)", self.label, step, total, info, clock(elapsed),
-                     clock(elapsed / max(step - self.first_step, 1) * (total - step)))
+            log.info("%s step %d/%d  %s  (%s elapsed, %s left)", self.label, step, total, info, clock(elapsed), left)
 
 
 def clock(seconds: float) -> str:
@@ -137,6 +191,7 @@ class SearchDisplay:
         self.task = None
         self.last = 0.0
         self.t0 = time.perf_counter()
+        self.eta = Eta(total, now=self.t0)  # the first step compiles the scorer's kernels and fills its caches
 
     def __enter__(self) -> "SearchDisplay":
         if self.rich:
@@ -144,8 +199,8 @@ class SearchDisplay:
 
             self.progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                                      TextColumn("steps ({task.fields[phase]})  elapsed"), TimeElapsedColumn(),
-                                     TextColumn("left"), TimeRemainingColumn(), console=console)
-            self.task = self.progress.add_task(self.label, total=self.total, phase="")
+                                     TextColumn("left {task.fields[left]}"), console=console)
+            self.task = self.progress.add_task(self.label, total=self.total, phase="", left="?")
             self.live = Live(console=console, refresh_per_second=4, transient=False)
             self.live.start()
         return self
@@ -160,7 +215,7 @@ class SearchDisplay:
         from rich.console import Group
 
         assert self.progress is not None
-        self.progress.update(self.task, completed=step, phase=row["phase"])
+        self.progress.update(self.task, completed=step, phase=row["phase"], left=left_text(self.eta.left(step)))
         t = Table(show_header=True, header_style="bold", title="best program so far", title_justify="left")
         t.add_column("objective", justify="right")
         t.add_column("= L1 action error", justify="right")
@@ -178,6 +233,7 @@ class SearchDisplay:
 
     def update(self, step: int, result, row) -> None:
         now = time.perf_counter()
+        self.eta.update(step, now)
         if self.live is not None:
             if now - self.last > 0.25 or step == self.total:
                 self.live.update(self._view(step, result, row))
@@ -188,7 +244,7 @@ class SearchDisplay:
             elapsed = now - self.t0
             log.info("%s step %d/%d (%s elapsed, %s left)  best objective %.4f = L1 %.4f + %g x %s %.3f"
                      "  |  %.0f proposals/s  |  accepted per move: %s", self.label, step, self.total,
-                     clock(elapsed), clock(elapsed / step * (self.total - step)), b.total, b.l1, self.lam,
+                     clock(elapsed), left_text(self.eta.left(step)), b.total, b.l1, self.lam,
                      self.term, b.degree, result.proposals_per_second, acc)
 
     def summary(self, result) -> None:
