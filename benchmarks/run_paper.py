@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from neurosym_cli.run.layout import RunFolder
+
+from run_seeds import PAPER_METHOD  # the committed files' method (this script's folder is on sys.path)
 from neurosym_cli.schemes import SCHEMES as BASELINES
 from neurosym_cli.stages.graph import plan, requires
 
@@ -63,7 +65,7 @@ class Job:
         return f"{self.task}: {self.stage}"
 
     def argv(self, overrides: list[str]) -> list[str]:
-        common = [f"task={self.task}", "budget=paper", "threads=1", *overrides]
+        common = [f"task={self.task}", "budget=paper", "threads=1", *PAPER_METHOD, *overrides]
         if self.stage == "pipeline":
             return ["neurosym", "pipeline", *common]
         cmd, baseline = self.stage.split()
@@ -121,7 +123,7 @@ def run_followups(tasks: list[str], logs: Path) -> None:
     env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     procs, t0 = {}, time.time()
     for t in todo:
-        argv = ["neurosym", "pipeline", f"task={t}", "budget=paper", "threads=1", *FOLLOWUPS[t]]
+        argv = ["neurosym", "pipeline", f"task={t}", "budget=paper", "threads=1", *PAPER_METHOD, *FOLLOWUPS[t]]
         procs[t] = subprocess.Popen(argv, stdout=open(logs / f"{t}-followup.log", "w"), stderr=subprocess.STDOUT,
                                     cwd=ROOT, env=env)
     took = {}

@@ -46,6 +46,9 @@ ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("random-cross", "random-grid", "unlabeled-goals")
 SEEDS = (0, 1, 2)
 """the training seeds the protocol runs per task (docs/results.md reads both from here)"""
+PAPER_METHOD = ("synth.search=mcmc", "synth.front=false", "pipeline.select=none")
+"""the paper's method (MCMC, the single-lambda program), the defaults before issue 37: what the committed result
+files ran, so the protocol keeps reproducing them; --defaults runs today's defaults instead"""
 KEEP_SELECT = ("name", "lam", "rules", "features", "objective", "l1", "degree_term", "loss", "degree", "max_in",
                "max_out")
 
@@ -171,6 +174,8 @@ def main() -> None:
     ap.add_argument("--runs", default=str(ROOT / "outputs"), help="runs root")
     ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "seeds"), help="where result files go")
     ap.add_argument("--commit", action="store_true", help="git-commit each result file as it is written")
+    ap.add_argument("--defaults", action="store_true", help="today's defaults (hybrid search, the pick among the "
+                    "front) instead of the paper's method the committed files ran (PAPER_METHOD)")
     ap.add_argument("--extra", nargs="*", default=[], help="more overrides for every pipeline (tiny rehearsals)")
     ap.add_argument("--stash-every", type=float, default=600.0, help="seconds between stashes of an unfinished "
                     "task-seed's resumable artifacts (0 = never)")
@@ -202,6 +207,7 @@ def main() -> None:
                 print(f"{task} seed {seed}: done ({dest})", flush=True)
                 continue
             common = [f"task={task}", f"budget={args.budget}", f"seed={seed}", "threads=1", "plots=false",
+                      *(() if args.defaults else PAPER_METHOD),
                       "progress=plain", f"runs_root={runs}"]
             cmds = [[neurosym(), "train", *common],
                     [neurosym(), "select", *common, f"select.jobs={args.jobs}", *args.extra],

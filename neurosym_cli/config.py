@@ -204,9 +204,10 @@ class SynthConfig:
     coarse: int = 1
     """score the restart phases on every coarse-th state of D only (the same objective on a subsample); each
     restart's best is scored on the whole of D, and the final chain always runs on the whole of D. 1 = off"""
-    front: bool = False
+    front: bool = True
     """also search the degree-budget front: for each budget of max in+out on D, the lowest-L1 program within it
-    (synth/front.py), written to synth/<tag>/front.json; the program the single-lam search picks is unchanged"""
+    (synth/front.py), written to synth/<tag>/front.json; the program the single-lam search picks is unchanged.
+    true by default since issue 37 (false before: the paper's method)"""
     front_budgets: list[float] = field(default_factory=list)
     """the front's budgets of max in+out; empty: 0 (silence), 1, ..., min(K + N - 1, 3K)"""
     front_steps: int = 0
@@ -214,10 +215,12 @@ class SynthConfig:
     backend: str = "auto"
     """scorer kernels: numba (compiled bookkeeping and rule scans, CPU), torch (the reference code, any device),
     auto (numba on a CPU when it is installed, else torch); the objective is the same (tests compare them)"""
-    search: str = "mcmc"
-    """mcmc: the paper's Metropolis chains with restarts; hybrid: restarts of hill climbing over every single-edit
-    neighbour, threshold fitting on the quantile grid and kicks, never scoring a program twice (synth/local.py).
-    Both score budget.mcmc_steps programs; temperature, patience and coarse apply to mcmc only"""
+    search: str = "hybrid"
+    """mcmc: the paper's Metropolis chains with restarts; hybrid (the default since issue 37: a better objective
+    than mcmc at equal wall time on every paper task and the ring, benchmarks/bench_search.py): restarts of hill
+    climbing over every single-edit neighbour, threshold fitting on the quantile grid and kicks, never scoring a
+    program twice (synth/local.py). Both score budget.mcmc_steps programs; temperature, patience and coarse apply
+    to mcmc only. The paper's method: synth.search=mcmc synth.front=false pipeline.select=none"""
 
     def __post_init__(self) -> None:
         check_finite(self, "synth.")

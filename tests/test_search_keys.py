@@ -49,12 +49,13 @@ def test_selected_true_finds_the_hybrid_program_it_selected(tmp_path):
     assert rec["synth"]["search"] == "hybrid" and rec["name"].endswith("-hybrid")
 
     # select under MCMC names the command that reuses the hybrid's programs (it did not see them before)
-    cfg = compose_config("select", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", *grid_args])
+    cfg = compose_config("select", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", *grid_args,
+                                    "synth.search=mcmc"])
     line = searched_otherwise(cfg, grid(cfg))
     assert line is not None and "synth.search=hybrid" in line
 
-    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "baselines=[prog]", "selected=true"],
-            tmp_path)
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "baselines=[prog]", "selected=true",
+             "pipeline.select=none"], tmp_path)  # the selected program as it is, not a pick among its front
     assert f"prog-{rec['name']}" in p.stdout
     programs = sorted(d.name for d in (exp / "synth").iterdir() if (d / "program.txt").exists())
     assert programs == [rec["name"]], programs  # no second program searched by MCMC

@@ -44,14 +44,16 @@ settings of `neurosym tune`, which evaluates nothing on the test seeds; records 
 PICKED = ("rules", "lam", "features", "synth")
 """what `neurosym select` chooses per training seed (K, lambda, features, search settings): allowed to differ"""
 
-ADDED = ("synth.search", "synth.front", "synth.front_budgets", "synth.front_steps", "pipeline.select")
+ADDED = ("synth.front_budgets", "synth.front_steps")
 """config keys added to the schema on 2026-12-03: a record written before lacks them, and its run is what their
-schema default does (MCMC, no front, the single-lam program), so it reads as that default"""
+schema default does, so it reads as that default"""
 
-BEFORE = {"task.objective": "paper", "compile": "off"}
+BEFORE = {"task.objective": "paper", "compile": "off", "synth.search": "mcmc", "synth.front": False,
+          "pipeline.select": "none", "pipeline.margin": None}
 """config keys added with another default than what the code did before them: what a record without them ran
 (every task's objective was the paper's before task.objective, a task that states none now composes scaled; the
-step was eager before compile=)"""
+step was eager before compile=; the search was MCMC without a front and the pipeline ran its single-lam program
+before issue 37 made hybrid, the front and the pick among it the defaults)"""
 
 
 def schema_default(key: str) -> Any:

@@ -46,9 +46,10 @@ SEARCH, SILENT_BASELINE = "prog", "no-comm"
 RETRAINED = "prog-retrained"
 """the baseline each candidate is retrained and validated as"""
 RULE = ("retrained under each distinct program of the front, validated on budget.val_seeds: among the programs "
-        "whose paired 95% Student-t interval of the validation loss difference to the best contains 0, the lowest "
-        "validation max in+out (lower mean loss on a tie); silent programs are no candidates when tf-full beats "
-        "no-comm on validation (paired 95% interval of no-comm - tf-full above 0)")
+        "whose paired 95% Student-t interval of the validation loss difference to the best ends below "
+        "pipeline.margin x the best's mean loss, the lowest validation max in+out (lower mean loss on a tie); "
+        "silent programs are no candidates when tf-full beats no-comm on validation (paired 95% interval of "
+        "no-comm - tf-full above 0)")
 """the rule, as the choice file states it"""
 
 RunStage = Callable[..., Any]
@@ -56,15 +57,16 @@ RunStage = Callable[..., Any]
 
 
 # --------------------------------------------------------------------------------------------- the rule
-def pick(rows: Sequence[dict[str, Any]], *, helps: bool) -> list[dict[str, Any]]:
+def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = None) -> list[dict[str, Any]]:
     """The rule on validation rows (``name``, ``loss`` per validation seed, ``degree``: mean max in+out over them).
 
     Silent rows (degree below guard.SILENT) are left out when ``helps`` (unless every row is silent: then they stay,
-    and the guard's line follows). Returns select.choose's annotated rows of the candidates (one ``picked``), then
-    the left-out rows with ``excluded`` true."""
+    and the guard's line follows). ``margin``: select.choose's equivalence margin (None: the paper's test). Returns
+    select.choose's annotated rows of the candidates (one ``picked``), then the left-out rows with ``excluded``
+    true."""
     silent = [r for r in rows if r["degree"] < SILENT]
     keep = [r for r in rows if not (helps and r["degree"] < SILENT)] or list(rows)
-    chosen = choose(keep)
+    chosen = choose(keep, margin=margin)
     for r in chosen:
         r["excluded"] = False
     left = [dict(r, excluded=True, similar=None, picked=False) for r in silent if not any(r is k for k in keep)]
@@ -151,7 +153,7 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
                      "label": v["label"], "program": cand["program"], "l1_on_d": cand["l1"],
                      "degree_on_d": cand["degree_on_d"], "loss": v["loss"], "degree": v["degree"],
                      "max_in": v["max_in"], "max_out": v["max_out"]})
-    ranked = pick(rows, helps=helps)
+    ranked = pick(rows, helps=helps, margin=cfg.pipeline.margin)
     chosen = next(r for r in ranked if r["picked"])
     if helps and chosen["degree"] < SILENT:
         log.warning("every program of the front is silent on validation, though tf-full beats no-comm: the front "
@@ -161,7 +163,7 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
         "command": "pipeline", "kind": "front-selection", "version": __version__, "task": cfg.task.name,
         "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
         "front_sha1": hashlib.sha1(rd.front_file.read_bytes()).hexdigest(), "val_seeds": cfg.budget.val_seeds,
-        "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE,
+        "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE, "margin": cfg.pipeline.margin,
         "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
         "communication_helps": helps, "no_comm_minus_tf_full": [gap, gap_ci],
         "picked": {k: chosen[k] for k in ("budget", "program_file", "label", "program", "degree", "loss_mean")},

@@ -17,14 +17,16 @@ DEGREE = "max_degree"
 """the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
 
 
-def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def choose(rows: Sequence[dict[str, Any]], *, margin: float | None = None) -> list[dict[str, Any]]:
     """The paper's rule on validation rows. Each row has ``name``, ``loss`` (per validation seed, the same seeds in
     the same order for every row) and ``degree`` (its mean over those seeds).
 
     Returns the rows annotated, ordered by (not similar, degree, loss): ``loss_mean``, ``loss_ci``, ``diff`` (mean
-    paired difference to the validation-best), ``diff_ci`` (its 95 % half-width), ``similar`` (the interval
-    contains 0: the difference is not significant) and ``picked`` (the lowest degree among the similar rows, the
-    lower mean loss on a tie)."""
+    paired difference to the validation-best), ``diff_ci`` (its 95 % half-width), ``similar`` and ``picked`` (the
+    lowest degree among the similar rows, the lower mean loss on a tie). ``similar``: without ``margin``, the
+    interval contains 0 (the difference is not significant: the paper's appendix B); with it, an equivalence test,
+    the interval's upper end is at most ``margin`` x |the best's mean loss| (a noisy row is no longer similar just
+    because its interval is wide)."""
     if not rows:
         raise ValueError("nothing to choose from")
     seeds = {len(r["loss"]) for r in rows}
@@ -37,7 +39,8 @@ def choose(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     for r in out:
         d = [a - b for a, b in zip(r["loss"], best["loss"])]
         r["diff"], r["diff_ci"] = mean_ci(d)
-        r["similar"] = r is best or r["diff"] <= r["diff_ci"]
+        r["similar"] = r is best or (r["diff"] <= r["diff_ci"] if margin is None
+                                     else r["diff"] + r["diff_ci"] <= margin * abs(best["loss_mean"]))
         r["best"] = r is best
         r["picked"] = False
     out.sort(key=lambda r: (not r["similar"], r["degree"], r["loss_mean"]))

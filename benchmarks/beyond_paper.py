@@ -1,0 +1,214 @@
+"""Tasks beyond the paper with the defaults only (issue 37): run, resume across sessions, collect, judge.
+
+    python benchmarks/beyond_paper.py                                  # every task, training seeds 0 1 2
+    python benchmarks/beyond_paper.py --tasks consensus --seeds 0 --commit
+    python benchmarks/beyond_paper.py --verdicts                       # print the verdicts of the committed files
+
+For each (task, training seed) it runs the command a user would type, ``neurosym pipeline <task> seed=S`` with the
+defaults (the scaled objective, the degree-budget front, the hybrid search, the pick by validation after
+retraining) and only the three baselines the verdict needs (tf-full, prog-retrained, no-comm), one thread, then
+writes the small result file ``docs/results/beyond/<task>-seed<S>.json`` (each baseline's summary and per
+evaluation seed rows, the program, the front pick, stage times, machine). Unfinished task-seeds are stashed and
+restored as `benchmarks/run_seeds.py` does (small resumable artifacts under ``<out>/partial/``), so a run longer
+than a session goes on in the next one.
+
+The verdict of issue 37, per training seed and across seeds 0-2 (``verdicts``): communication matters (no-comm -
+tf-full, paired 95 % t interval over the evaluation seeds, above 0); prog-retrained significantly better than no-comm
+(no-comm - prog-retrained above 0); the share of the no-comm -> tf-full gap it closes (at least a half); its max
+in+out against tf-full's (at most a third).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from neurosym_cli.stats import mean_ci
+
+try:  # run as a script (benchmarks/ on sys.path) or imported from benchmarks.results
+    from run_seeds import PIN, git_commit, machine, neurosym, restore, stash, write_result
+except ImportError:  # pragma: no cover - the import path of benchmarks.results
+    from benchmarks.run_seeds import PIN, git_commit, machine, neurosym, restore, stash, write_result
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "docs" / "results" / "beyond"
+BASELINES = ("tf-full", "prog-retrained", "no-comm")
+SEEDS = (0, 1, 2)
+
+
+@dataclass(frozen=True)
+class Task:
+    """A task beyond the paper as the protocol runs it: its command-line arguments and what it is."""
+
+    name: str
+    args: tuple[str, ...]
+    about: str
+
+
+TASKS = {t.name: t for t in (
+    Task("consensus", ("--config-dir", "examples/consensus/conf", "task=consensus", "budget=quick"),
+         "examples/consensus: 10 agents, each with a noisy estimate of one common goal; pair observations "
+         "[x_j - x_i, v_j - v_i] (Dp = 4)"),
+    Task("vmas-navigation-nolidar", ("task=vmas/navigation-nolidar", "budget=vmas"),
+         "VMAS navigation without lidar: the only sight of the others is o_ij"),
+    Task("swarm-200", ("task=swarm", "task.agents_per_group=100", "budget=quick"),
+         "the swarm, two fronts of 100 crossing (N = 200)"),
+)}
+"""the tasks beyond the paper, by the name of their result files"""
+
+
+def result_file(out: Path, task: str, seed: int) -> Path:
+    return out / f"{task}-seed{seed}.json"
+
+
+def stash_dir(out: Path, task: str, seed: int) -> Path:
+    return out / "partial" / f"{task}-seed{seed}"
+
+
+def run_args(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = ()) -> list[str]:
+    return [*task.args, *extra, f"seed={seed}", "threads=1", "plots=false", "progress=plain", f"runs_root={runs}",
+            f"baselines=[{','.join(BASELINES)}]"]
+
+
+def exp_dir(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = ()) -> Path:
+    """The run directory of one task-seed (the config's own, as the pipeline names it)."""
+    from neurosym_cli import api
+
+    args = run_args(task, seed, runs, extra)
+    config_dir = args[args.index("--config-dir") + 1] if "--config-dir" in args else None
+    items = [a for a in args if not a.startswith("--config-dir") and a != config_dir]
+    return Path(api.compose("pipeline", items, config_dir=ROOT / config_dir if config_dir else None).exp_dir)
+
+
+def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, ...] = ()) -> dict:
+    """The small result file of one task-seed: each baseline's evaluation (the label the pipeline ran it under)."""
+    from neurosym_cli.run.layout import RunFolder
+
+    run = RunFolder(exp)
+    baselines = {}
+    for f in run.metrics_files():
+        m = json.loads(f.read_text())
+        if m["baseline"] in BASELINES:
+            baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
+                                        "seconds": m["seconds"]}
+    programs = {p.parent.name: p.read_text().strip() for p in run.programs()}
+    front = sorted(exp.glob("select/front/*.json"))
+    timings = run.timings_file
+    return {"task": task.name, "about": task.about, "seed": seed, "command": "neurosym pipeline " + " ".join(
+                a for a in run_args(task, seed, Path("R"), extra) if not a.startswith("runs_root")),
+            "baselines": baselines, "programs": programs,
+            "front_pick": json.loads(front[-1].read_text()) if front else None,
+            "timings": json.loads(timings.read_text()) if timings.exists() else {},
+            "wall_s": round(wall_s, 1), "machine": {**machine(exp), "cores": os.cpu_count()}}
+
+
+def paired(res: dict, a: str, b: str) -> tuple[float, float]:
+    """Mean and 95 % t half-width of a - b (costs) over the evaluation seeds both baselines share."""
+    xa = {r["seed"]: r["cost"] for r in res["baselines"][a]["per_seed"]}
+    xb = {r["seed"]: r["cost"] for r in res["baselines"][b]["per_seed"]}
+    return mean_ci([xa[s] - xb[s] for s in sorted(set(xa) & set(xb))])
+
+
+def verdict(res: dict) -> dict:
+    """Issue 37's four tests on one training seed's result file."""
+    cost = {b: res["baselines"][b]["summary"]["cost"]["mean"] for b in BASELINES}
+    deg = {b: res["baselines"][b]["summary"]["max_degree"]["mean"] for b in BASELINES}
+    helps = paired(res, "no-comm", "tf-full")
+    better = paired(res, "no-comm", "prog-retrained")
+    gap = cost["no-comm"] - cost["tf-full"]
+    closed = (cost["no-comm"] - cost["prog-retrained"]) / gap if gap > 0 else float("nan")
+    share = deg["prog-retrained"] / deg["tf-full"] if deg["tf-full"] > 0 else float("nan")
+    return {"cost": cost, "max_in_out": deg, "comm_helps": helps, "prog_better_than_no_comm": better,
+            "gap_closed": closed, "degree_share": share,
+            "holds": {"comm helps": helps[0] - helps[1] > 0, "prog-retrained beats no-comm": better[0] - better[1] > 0,
+                      "closes half the gap": closed >= 0.5, "a third of the degree": share <= 1 / 3}}
+
+
+def verdicts(out: Path) -> dict[str, dict]:
+    """Per task: its seeds' verdicts and, across the seeds, the mean ± 95 % t half-width over training seeds."""
+    by_task: dict[str, dict] = {}
+    for name in TASKS:
+        files = sorted(out.glob(f"{name}-seed*.json"), key=lambda p: int(p.stem.rsplit("seed", 1)[1]))
+        if not files:
+            continue
+        per = {json.loads(f.read_text())["seed"]: verdict(json.loads(f.read_text())) for f in files}
+        across = {k: mean_ci([v[k] for v in per.values()]) for k in ("gap_closed", "degree_share")}
+        by_task[name] = {"seeds": per, "across": across}
+    return by_task
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=list(TASKS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
+    ap.add_argument("--runs", default=str(ROOT / "outputs" / "beyond"), help="runs root")
+    ap.add_argument("--out", default=str(OUT), help="where result files go")
+    ap.add_argument("--commit", action="store_true", help="git-commit each result file and stash as written")
+    ap.add_argument("--stash-every", type=float, default=600.0, help="seconds between stashes (0 = never)")
+    ap.add_argument("--extra", nargs="*", default=[], help="more overrides (a tiny rehearsal: budget=tiny)")
+    ap.add_argument("--verdicts", action="store_true", help="print the verdicts of the result files and stop")
+    a = ap.parse_args()
+    out, runs = Path(a.out), Path(a.runs)
+    if a.verdicts:
+        for name, v in verdicts(out).items():
+            print(f"{name}: {TASKS[name].about}")
+            for seed, r in v["seeds"].items():
+                print(f"  seed {seed}: " + ", ".join(f"{k} {'yes' if ok else 'NO'}" for k, ok in r["holds"].items())
+                      + f" (gap closed {r['gap_closed']:.2f}, degree share {r['degree_share']:.2f})")
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    env = {**os.environ, **PIN}
+    for seed in a.seeds:
+        for name in a.tasks:
+            task, dest = TASKS[name], result_file(out, name, seed)
+            if dest.exists():
+                print(f"{name} seed {seed}: done ({dest})", flush=True)
+                continue
+            extra = tuple(a.extra)
+            exp = exp_dir(task, seed, runs, extra)
+            part = stash_dir(out, name, seed)
+            back = restore(part, exp)
+            if back:
+                print(f"{name} seed {seed}: {back} stashed artifacts restored", flush=True)
+            stop = threading.Event()
+
+            def keep() -> None:
+                while not stop.wait(a.stash_every):
+                    if stash(exp, part) and a.commit:
+                        git_commit(part, f"docs/results/beyond: stash of unfinished {name} seed {seed} (issue 37)")
+
+            if a.stash_every > 0:
+                threading.Thread(target=keep, daemon=True).start()
+            logs = runs / "logs"
+            logs.mkdir(parents=True, exist_ok=True)
+            t0 = time.time()
+            cmd = [neurosym(), "pipeline", *run_args(task, seed, runs, extra)]
+            print(f"{time.strftime('%H:%M:%S')} {name} seed {seed}: {' '.join(cmd)}", flush=True)
+            with open(logs / f"{name}-seed{seed}.log", "a") as log:
+                rc = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
+            stop.set()
+            if rc != 0:
+                if stash(exp, part) and a.commit:
+                    git_commit(part, f"docs/results/beyond: stash of unfinished {name} seed {seed} (issue 37)")
+                print(f"{name} seed {seed}: exit {rc}; see {logs / f'{name}-seed{seed}.log'}", flush=True)
+                continue
+            res = collect(exp, task, seed, time.time() - t0, extra)
+            write_result(dest, res)
+            v = verdict(res)
+            print(f"{time.strftime('%H:%M:%S')} {name} seed {seed}: " + ", ".join(
+                f"{k} {'yes' if ok else 'NO'}" for k, ok in v["holds"].items()) + f" -> {dest}", flush=True)
+            if a.commit:
+                git_commit(dest, f"docs/results/beyond: {name} training seed {seed} (issue 37)")
+                if part.exists():
+                    subprocess.run(["git", "rm", "-r", "-q", "--", str(part)], cwd=ROOT, check=False)
+                    git_commit(part, f"docs/results/beyond: {name} seed {seed} done; its stash removed")
+
+
+if __name__ == "__main__":
+    main()
