@@ -87,7 +87,7 @@ def main() -> None:
     record = {"command": f"neurosym pipeline task={TASK} -m seed={','.join(map(str, seeds))} {a.command}".strip(),
               "date": datetime.date.today().isoformat(),
               "machine": {**machine(base / seed_dir(seeds[0])), "cores": os.cpu_count(),
-                          "processor": platform.machine(), "threads": "0 (torch's default: the cores)"},
+                          "processor": platform.machine(), "threads": threads_of(base / seed_dir(seeds[0]))},
               "note": "per training seed: each baseline's summary over 20 evaluation seeds (mean, std ddof 1, "
                       "ci95 = 95 % t half-width, n)",
               "seeds": {str(s): seed_record(base / seed_dir(s)) for s in seeds}}
@@ -117,6 +117,13 @@ def main() -> None:
     near = within(record, "prog-retrained", "tf-full", 0.05)
     print(f"prog-retrained within 5 % of tf-full's loss on {sum(near.values())} of {len(near)} seeds "
           f"({', '.join(str(s) for s, ok in near.items() if not ok) or 'none'} outside)")
+
+
+def threads_of(exp: Path) -> str:
+    """The torch thread count the oracle of a run directory trained with, as its manifest's config recorded it."""
+    manifest = json.loads(RunFolder(exp).manifest_of("oracle").read_text())
+    n = (manifest.get("config") or {}).get("threads")
+    return "0 (torch's default: the cores)" if n == 0 else str(n) if n is not None else "unrecorded"
 
 
 def label_of(baselines: dict, name: str) -> str | None:
