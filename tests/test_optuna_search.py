@@ -190,11 +190,14 @@ def test_a_model_retrained_at_another_rate_has_its_own_names(tmp_path):
 
     base = [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", "rules=2", "lam=0.5"]
     default = compose_config("retrain", base)
-    assert RunDir(default).model_name == "retrained-k2-lam0.5-v1"  # every earlier run's name
-    assert RunDir(default).label == "prog-retrained-k2-lam0.5-v1" and "retrain_lr" not in retrain_command(default)
+    tag = RunDir(default).program_tag  # k2-lam0.5-v1 and the search's variant
+    assert tag.startswith("k2-lam0.5-v1")
+    assert RunDir(default).model_name == f"retrained-{tag}"  # every earlier run's name
+    assert RunDir(default).label == f"prog-retrained-{tag}" and "retrain_lr" not in retrain_command(default)
     other = compose_config("retrain", [*base, "optim.retrain_lr=0.003"])
-    assert RunDir(other).model_name == "retrained-k2-lam0.5-v1-rlr0.003"
-    assert RunDir(other).label == "prog-retrained-k2-lam0.5-v1-rlr0.003"
+    assert RunDir(other).program_tag == tag  # the program is the same one
+    assert RunDir(other).model_name == f"retrained-{tag}-rlr0.003"
+    assert RunDir(other).label == f"prog-retrained-{tag}-rlr0.003"
     assert retrain_command(other).endswith(" optim.retrain_lr=0.003")
 
 
