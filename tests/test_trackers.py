@@ -215,6 +215,18 @@ def test_missing_tracker_package_is_one_line_naming_the_extra(tracker, tmp_path)
     assert not (tmp_path / EXP / "train/oracle/model.pt").exists()  # refused before any training
 
 
+def test_mlflow_without_its_sqlite_store_names_the_extra(monkeypatch, tmp_path):
+    pytest.importorskip("mlflow", reason="logger=mlflow needs the mlflow extra")
+    from neurosym_cli.errors import UserError
+    from neurosym_cli.utils.tracking import TrackedRun, open_tracker
+
+    monkeypatch.delenv("MLFLOW_TRACKING_URI", raising=False)
+    monkeypatch.setitem(sys.modules, "sqlalchemy", None)  # mlflow-skinny alone reads no SQLite store
+    with pytest.raises(UserError, match=r"^logger=mlflow needs the mlflow extra: pip install -e '\.\[mlflow\]'"):
+        open_tracker("mlflow", TrackedRun(key="t/b/seed0/train-oracle", tags={}, store=tmp_path))
+    assert not (tmp_path / "mlflow/mlflow.db").exists()
+
+
 def test_logger_choices_are_checked_in_one_line(tmp_path):
     from neurosym_cli.utils.tracking import logger_problem, trackers
 

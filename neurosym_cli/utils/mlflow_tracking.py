@@ -9,10 +9,11 @@ key; a resumed one continues it."""
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import os
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 from typing import Iterator, Mapping
 
@@ -45,7 +46,6 @@ def _held(folder: Path) -> Iterator[None]:
 def _client(run: TrackedRun):
     """(MlflowClient, experiment id) of the configured store; one line when it cannot be opened."""
     try:
-        from mlflow.entities import ViewType  # noqa: F401  (the client's own imports, checked here)
         from mlflow.tracking import MlflowClient
     except ImportError:
         raise missing("mlflow") from None
@@ -55,6 +55,8 @@ def _client(run: TrackedRun):
     if not uri:
         from .io import check_inside
 
+        if not all(importlib.util.find_spec(m) for m in ("sqlalchemy", "alembic")):  # mlflow-skinny alone: no SQLite
+            raise missing("mlflow")
         folder = (run.store / STORE).resolve()
         check_inside(folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -62,7 +64,7 @@ def _client(run: TrackedRun):
         for quiet in ("alembic", "mlflow.store.db.utils"):  # "creating initial tables": no news for a user
             logging.getLogger(quiet).setLevel(logging.WARNING)
     try:
-        with _held(folder) if folder else _nothing():
+        with _held(folder) if folder else nullcontext():
             client = MlflowClient(tracking_uri=uri)
             exp = client.get_experiment_by_name(name)
             if exp is None:
@@ -74,11 +76,6 @@ def _client(run: TrackedRun):
     except Exception as e:  # a server that does not answer, a database that is not one: what it said, one line
         raise UserError(f"logger=mlflow cannot open the MLflow store {uri}: {cut(_first_line(e), 300)} (set "
                         "MLFLOW_TRACKING_URI to another, or unset it for the one under the runs root)") from None
-
-
-@contextmanager
-def _nothing() -> Iterator[None]:
-    yield
 
 
 def _first_line(e: Exception) -> str:
