@@ -246,6 +246,13 @@ def _ring():
     return ring.RingConfig()
 
 
+def _consensus():
+    sys.path.insert(0, str(ROOT / "examples" / "consensus"))
+    import consensus  # noqa: F401  (the example where communication matters, imported like the ring)
+
+    return consensus.ConsensusConfig()
+
+
 def _vmas(name):
     pytest.importorskip("vmas", reason="the vmas extra is not installed (pip install -e '.[vmas]')")
     return _paper(name)
@@ -254,7 +261,7 @@ def _vmas(name):
 TASKS = {"random-cross": lambda: _paper("random-cross"), "random-grid": lambda: _paper("random-grid"),
          "unlabeled-goals": lambda: _paper("unlabeled-goals"), "two-groups-cross": lambda: _paper("two-groups-cross"),
          "swarm": lambda: _paper("swarm"), "swarm-sparse": lambda: _sparse_swarm(),
-         "ring": _ring, "toy": lambda: ToyConfig(),
+         "ring": _ring, "consensus": _consensus, "toy": lambda: ToyConfig(),
          "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion"),
          "vmas/navigation-nolidar": lambda: _vmas("vmas/navigation-nolidar")}
 
