@@ -220,3 +220,21 @@ def test_compiled_steps_do_not_keep_their_provider_alive(monkeypatch):
     del comm
     gc.collect()
     assert gone() is None
+
+
+def test_tf32_is_off_where_a_gpu_runs():
+    """Issue 39: on a GPU float32 matmuls keep full precision (no TF32), as on the CPU."""
+    import torch
+
+    from neurosym_cli.utils.device import full_precision, resolve_device
+
+    before = torch.get_float32_matmul_precision(), torch.backends.cudnn.allow_tf32
+    try:
+        torch.set_float32_matmul_precision("high")
+        torch.backends.cudnn.allow_tf32 = True
+        full_precision()
+        assert torch.get_float32_matmul_precision() == "highest" and not torch.backends.cudnn.allow_tf32
+        assert resolve_device("cpu").type == "cpu"
+    finally:
+        torch.set_float32_matmul_precision(before[0])
+        torch.backends.cudnn.allow_tf32 = before[1]
