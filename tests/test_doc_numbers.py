@@ -1,0 +1,112 @@
+"""Numbers the docs state, each checked against the file or default it comes from (issue 40: a number a doc states
+is generated or checked by a test). One row of CHECKS per statement: the doc, a pattern whose groups are the
+numbers as the doc writes them (matched on the doc's text with its line breaks made spaces), how many times the
+doc must state it (so a rewording that the pattern misses fails too), and the source that says what they are.
+A doc that states a number with a source gets a row here."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+MAIN_JOB = ROOT / "docs" / "results" / "main-job" / "seeds.json"
+
+
+def _far_thresholds() -> list[float]:
+    """Per training seed of the main job (docs/results/main-job/seeds.json), the threshold of the test `d >= c` in
+    the first rule of its program: how far away the random agent it asks is at least."""
+    from neurosym_cli.dsl.ast import And, Test
+    from neurosym_cli.dsl.parser import parse
+
+    def tests(c):
+        return tests(c.left) + tests(c.right) if isinstance(c, And) else [c] if isinstance(c, Test) else []
+
+    seeds = json.loads(MAIN_JOB.read_text())["seeds"]
+    out = []
+    for k in sorted(seeds, key=int):
+        rule = parse(seeds[k]["programs"]["k2-lam0.5-v1"][0] + "\n").rounds[0][0]
+        out.append(next(t.threshold for t in tests(rule.cond) if t.lhs.terms == (("d", 1.0),)))
+    return out
+
+
+def gif_threshold() -> tuple[str, ...]:
+    """README's animated episode (docs/figures/two-groups-episode2.gif, seed 0 of the main job): its first rule's
+    distance, as the program prints it."""
+    return (repr(_far_thresholds()[0]),)
+
+
+def seed_thresholds() -> tuple[str, ...]:
+    """The three seeds' distances to one decimal, as README's summary of the main job writes them."""
+    return tuple(f"{c:.1f}" for c in _far_thresholds())
+
+
+def select_finalists() -> tuple[str, ...]:
+    """`neurosym select`'s default select.finalists (conf/select.yaml, what the command line composes)."""
+    from omegaconf import OmegaConf
+
+    return (str(OmegaConf.load(ROOT / "conf" / "select.yaml").select.finalists),)
+
+
+def grad_clip() -> tuple[str, ...]:
+    """optim.grad_clip's default (config.OptimConfig)."""
+    from neurosym_cli.config import OptimConfig
+
+    return (repr(float(OptimConfig().grad_clip)),)
+
+
+def parser_limits() -> tuple[str, ...]:
+    """What the program parser refuses: rules in a round, nesting of a filter, characters in a line."""
+    from neurosym_cli.dsl.parser import MAX_DEPTH, MAX_LINE, MAX_RULES
+
+    return (str(MAX_RULES), str(MAX_DEPTH), f"{MAX_LINE:,}")
+
+
+@dataclass(frozen=True)
+class Check:
+    doc: str  # path from the repository root
+    pattern: str  # a regular expression; its groups are the numbers
+    source: Callable[[], tuple[str, ...]]  # what the groups must read
+    times: int = 1  # how many times the doc states it
+
+
+CHECKS = [
+    Check("README.md", r"a random agent at least ([\d.]+) away", gif_threshold, times=2),  # the GIF's alt and caption
+    Check("README.md", r"at least ([\d.]+), ([\d.]+) and ([\d.]+) world units away", seed_thresholds),
+    Check("README.md", r"`select\.finalists` \((\d+)\)", select_finalists, times=2),
+    Check("docs/fidelity.md", r"`select\.finalists` \((\d+)\)", select_finalists),
+    Check("docs/extending.md", r"`optim\.grad_clip`, a norm of ([\d.]+)", grad_clip),
+    Check("docs/extending.md", r"at most (\d+) rules in a round, filters nested at most (\d+) deep, ([\d,]+) "
+          r"characters a line", parser_limits),
+]
+
+
+@pytest.mark.parametrize("check", CHECKS, ids=lambda c: f"{c.doc}:{c.source.__name__}")
+def test_a_number_the_docs_state_is_its_sources(check):
+    text = " ".join((ROOT / check.doc).read_text().split())
+    found = [m.groups() for m in re.finditer(check.pattern, text)]
+    assert len(found) == check.times, (f"{check.doc} states {check.pattern!r} {len(found)} times, expected "
+                                       f"{check.times}: reworded? update the row")
+    want = check.source()
+    for got in found:
+        assert got == want, f"{check.doc} says {got}, {check.source.__name__} says {want}: {check.source.__doc__}"
+
+
+def test_a_wrong_number_fails_its_check(tmp_path, monkeypatch):
+    """The mechanism itself: a doc whose number differs from its source fails."""
+    def three() -> tuple[str, ...]:
+        return ("3",)
+
+    (tmp_path / "doc.md").write_text("retrains the `select.finalists`\n(7) programs\n")
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    check = Check("doc.md", r"`select\.finalists` \((\d+)\)", three)
+    with pytest.raises(AssertionError, match=r"says \('7',\), three says \('3',\)"):
+        test_a_number_the_docs_state_is_its_sources(check)
+    with pytest.raises(AssertionError, match="states .* 1 times, expected 2"):
+        test_a_number_the_docs_state_is_its_sources(Check("doc.md", check.pattern, three, times=2))
