@@ -138,7 +138,7 @@ class EpisodeRecord:
     picks: np.ndarray | None  # (T, R, N, K) int32 the agent pick slot k (a program's rule k) chose for i (-1:
     # nobody), K the episode's widest (a provider such as comm-range pads to the degree of the moment); None when
     # the provider chose from logits
-    cost: np.ndarray  # (T,) loss of each step, summed over agents
+    cost: np.ndarray  # (T,) the task's loss of each step (Task.cost)
     collide: np.ndarray  # (T, N) bool: after step t, the agent is closer than the collision distance to another
     labelled: bool  # formation (each agent its own goal) or unlabeled goals
 

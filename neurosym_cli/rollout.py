@@ -18,7 +18,7 @@ from .step import Recorder, step
 class Trajectory:
     """Per-step records of a bucket (T steps, B episodes)."""
 
-    cost: Tensor  # (T, B) loss of each step, summed over agents; differentiable when rolled out with grad
+    cost: Tensor  # (T, B) the task's loss of each step (Task.cost); differentiable when rolled out with grad
     max_in: Tensor  # (T, B) max over agents of the in-degree (agents heard), mean over rounds
     max_out: Tensor  # (T, B) max over agents of the out-degree (agents that hear it), mean over rounds
     max_degree: Tensor  # (T, B) max over agents of in + out (the paper's deg, section 2)

@@ -36,7 +36,7 @@ class Step:
     picks: list[Tensor | None]  # per round r: the picks (B, N, K_r) long the provider handed out (-1 = nobody),
     # None where it chose from the logits (tf-full, hard-attn)
     state: TaskState  # after the task's dynamics applied the action
-    cost: Tensor  # (B,) the task's loss of the step (summed over agents); differentiable when run with grad
+    cost: Tensor  # (B,) the task's loss of the step (Task.cost: the whole team's); differentiable when run with grad
 
 
 Recorder = Callable[[Step], None]

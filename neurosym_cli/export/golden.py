@@ -11,7 +11,7 @@ the task applied. golden.npz holds arrays (numpy, no pickles), golden.json says 
                                        baseline without a program, the agents it heard, in index order, padded
     e<k>_uniform  (T, R, U, N, N) float32 the u-th random rule of round r drew [i, j] for agent i, candidate j
     e<k>_action   (T, N, A) float32    the action as applied (Task.target)
-    e<k>_cost     (T,) float64         the task's loss of step t (summed over agents); the episode loss is the mean
+    e<k>_cost     (T,) float64         the task's loss of step t (Task.cost); the episode loss is the mean
 """
 
 from __future__ import annotations
