@@ -53,7 +53,7 @@ class Task:
 
 TASKS = {t.name: t for t in (
     Task("consensus", ("--config-dir", "examples/consensus/conf", "task=consensus", "budget=quick"),
-         "examples/consensus: 10 agents, each with a noisy estimate of one common goal; pair observations "
+         "examples/consensus: 12 agents, each with a noisy estimate of one common goal; pair observations "
          "[x_j - x_i, v_j - v_i] (Dp = 4)"),
     Task("vmas-navigation-nolidar", ("task=vmas/navigation-nolidar", "budget=vmas"),
          "VMAS navigation without lidar: the only sight of the others is o_ij"),
@@ -137,9 +137,10 @@ def verdicts(out: Path) -> dict[str, dict]:
         files = sorted(out.glob(f"{name}-seed*.json"), key=lambda p: int(p.stem.rsplit("seed", 1)[1]))
         if not files:
             continue
-        per = {json.loads(f.read_text())["seed"]: verdict(json.loads(f.read_text())) for f in files}
+        results = {r["seed"]: r for r in (json.loads(f.read_text()) for f in files)}
+        per = {seed: verdict(r) for seed, r in results.items()}
         across = {k: mean_ci([v[k] for v in per.values()]) for k in ("gap_closed", "degree_share")}
-        by_task[name] = {"seeds": per, "across": across}
+        by_task[name] = {"seeds": per, "across": across, "results": results}
     return by_task
 
 

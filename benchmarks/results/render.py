@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 
 from .appendix import noisy, rl, vmas
+from .beyond import beyond
 from .files import PLANNED_SEEDS, TEMPLATE, load_seeds
 from .sections import glance, section, selection, stress
 from .seed_sections import seed_mean, seeds_glance, seeds_section
@@ -31,6 +32,7 @@ def render(template: str, variants: dict[str, dict], run: dict, seed_runs: dict 
         "selection": lambda t: selection(t, variants),
         "stress": lambda t: stress(t),
         "vmas": lambda t: vmas(t),
+        "beyond": lambda: beyond(),
         "rl": lambda t: rl(t, variants),
         "noisy": lambda t, clean: noisy(t, clean),
         "seeds": lambda: seeds_section(by_task),

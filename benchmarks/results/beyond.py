@@ -1,0 +1,52 @@
+"""{{beyond}}: the tasks beyond the paper with the defaults only (issue 37), from docs/results/beyond/*.json
+(benchmarks/beyond_paper.py writes them and holds the verdict's arithmetic)."""
+
+from __future__ import annotations
+
+from benchmarks.beyond_paper import BASELINES, OUT, TASKS, verdicts
+
+from .tables import minus
+
+
+def _pm(x: tuple[float, float], digits: int = 3) -> str:
+    return minus(f"{x[0]:+.{digits}f} ± {x[1]:.{digits}f}")
+
+
+def beyond() -> str:
+    """One table per task: per training seed each baseline's loss and max in+out, the paired differences, the share
+    of the gap closed and of tf-full's degree, and the four tests; then the tasks not yet run."""
+    found = verdicts(OUT)
+    out = []
+    for name, v in found.items():
+        task = TASKS[name]
+        first = next(iter(v["seeds"].values()))
+        out += [f"### {name}", "", f"{task.about}. Command: `neurosym pipeline {' '.join(task.args)} seed=S "
+                f"\"baselines=[{','.join(BASELINES)}]\"` (defaults otherwise).", "",
+                "| training seed | tf-full | prog-retrained | no-comm | max in+out (prog-retrained / tf-full) | "
+                "no-comm − tf-full | no-comm − prog-retrained | gap closed | share of tf-full's degree |",
+                "|---|---|---|---|---|---|---|---|---|"]
+        for seed, r in v["seeds"].items():
+            c, d = r["cost"], r["max_in_out"]
+            out.append(f"| {seed} | {c['tf-full']:.3f} | {c['prog-retrained']:.3f} | {c['no-comm']:.3f} | "
+                       f"{d['prog-retrained']:.2f} / {d['tf-full']:.2f} | {_pm(r['comm_helps'])} | "
+                       f"{_pm(r['prog_better_than_no_comm'])} | {r['gap_closed']:.0%} | {r['degree_share']:.2f} |")
+        out += ["", "The programs picked (the front's budget, then the program's rules):", ""]
+        for seed, res in v["results"].items():
+            pick = (res.get("front_pick") or {}).get("picked") or {}
+            if pick:
+                rules = "; ".join(line for line in pick["program"].splitlines() if line.strip())
+                out.append(f"- seed {seed}, budget {pick['budget']:g}: `{rules}`")
+        g, s = v["across"]["gap_closed"], v["across"]["degree_share"]
+        n = len(v["seeds"])
+        across = (f"across the {n} training seeds (mean ± 95 % t half-width over training seeds): gap closed "
+                  f"{g[0]:.0%} ± {g[1]:.0%}, share of tf-full's degree {s[0]:.2f} ± {s[1]:.2f}" if n > 1 else
+                  "one training seed so far: no interval across seeds")
+        tests = {k: sum(r["holds"][k] for r in v["seeds"].values()) for k in first["holds"]}
+        out += ["", f"Losses: mean over the evaluation seeds; differences: paired mean ± 95 % t half-width over the "
+                f"evaluation seeds; {across}. Holds on "
+                + ", ".join(f"{k}: {m} of {n} seeds" for k, m in tests.items()) + ".", ""]
+    missing = [n for n in TASKS if n not in found]
+    if missing:
+        out += ["Not yet run (benchmarks/beyond_paper.py resumes them across sessions): "
+                + "; ".join(f"{n} ({TASKS[n].about})" for n in missing) + ".", ""]
+    return "\n".join(out).rstrip("\n")
