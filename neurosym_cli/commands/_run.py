@@ -196,9 +196,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
 
             typed = apply_selected(typed)
         if typed.threads:
-            import torch  # only here: show-program must not pay for importing torch
+            from ..utils.cpu import set_threads
 
-            torch.set_num_threads(typed.threads)
+            set_threads(typed.threads)  # without importing torch: show-program and report must not pay for it
         from ..utils.compiling import configure
 
         configure(typed.compile, typed.device)  # the step compiled or eager (step.py), recorded in runtime

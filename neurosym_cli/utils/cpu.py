@@ -303,3 +303,12 @@ def runtime() -> dict[str, object]:
         "avx512f": "avx512f" in flags if flags else None,
         "compile": compiling.record(),  # compile=: asked, in effect, why not, compile seconds (utils/compiling.py)
     }
+
+
+def set_threads(n: int) -> None:
+    """torch's intra-op threads: set now when torch is loaded, else through the environment it reads when it loads
+    (OMP_NUM_THREADS, MKL_NUM_THREADS), so a command that never imports torch does not pay for importing it."""
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(n)
+    else:
+        os.environ["OMP_NUM_THREADS"] = os.environ["MKL_NUM_THREADS"] = str(n)
