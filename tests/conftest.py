@@ -1,3 +1,4 @@
+import json
 import os
 import sys
 from pathlib import Path
@@ -26,3 +27,37 @@ def neurosym_cmd():
     """How to invoke the CLI in a subprocess: the installed script, else the module."""
     exe = Path(sys.executable).parent / "neurosym"
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "neurosym_cli.cli"]
+
+
+# --- issue 37's defaults and the paper's method -------------------------------------------------------------------
+if str(ROOT) not in sys.path:  # benchmarks/ (a folder at the repository's root) imports under a plain `pytest` too
+    sys.path.append(str(ROOT))
+from benchmarks.run_seeds import PAPER_METHOD  # noqa: E402,F401  (written there once)
+
+# PAPER_METHOD, synth.search=mcmc synth.front=false pipeline.select=none: what a test about something other than the
+# defaults passes when its premise is the paper's programs and labels (synth/k2-lam0.5-v1, eval/prog-k2-lam0.5-v1)
+# rather than today's (the hybrid search's k2-lam0.5-v1-hybrid; the pipeline's prog under the front's pick).
+
+
+def run_dir(cmd: str, runs, *overrides: str):
+    """The RunDir of the config `neurosym <cmd> <overrides>` composes under the runs root ``runs`` (its program's
+    tag, label, model and files as the command names them)."""
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.run import RunDir
+
+    return RunDir(compose_config(cmd, [f"runs_root={runs}", *overrides]))
+
+
+def front_pick(runs, *overrides: str) -> dict:
+    """The pipeline's front selection of the run of ``overrides`` (pipeline.select=front, the default): the
+    ``picked`` row of select/front/<tag>.json (budget, program_file, label, program, degree, loss_mean)."""
+    search = run_dir("synth", runs, *overrides)
+    return json.loads(search.front_choice_file(search.program_tag).read_text())["picked"]
+
+
+def picked_labels(runs, *overrides: str) -> dict[str, str]:
+    """prog and prog-retrained -> the label the pipeline evaluates them under: the front's pick run as program=
+    (prog-file-<tag>-b<budget>-<sha1:8>-<features>)."""
+    program = front_pick(runs, *overrides)["program_file"]
+    return {b: run_dir("eval", runs, *overrides, f"baseline={b}", f"program={program}").label
+            for b in ("prog", "prog-retrained")}

@@ -6,10 +6,11 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, neurosym_cmd
+from conftest import ROOT, front_pick, neurosym_cmd, picked_labels, run_dir
 
 
 def run(args, tmp_path, check=True, timeout=300, plots=False):
@@ -166,10 +167,27 @@ def test_corrupt_checkpoint_is_reported(tmp_path):
     assert p.returncode != 0 and "corrupt checkpoint" in p.stderr and "Traceback" not in p.stderr
 
 
+def _rule_rows(stdout: str) -> list[list[str]]:
+    """The rows of show-program's rule table (#, rule, features read, reading, ...), each cell's wrapped lines joined
+    by a space: a long reading wraps within its column, beside the row's other cells."""
+    rows: list[list[str]] = []
+    for line in stdout.splitlines():
+        parts = line.split("│")  # the panel's border, the table's, its cells, the table's, the panel's
+        if not line.startswith("│ │") or len(parts) < 7:
+            continue
+        cells = [c.strip() for c in parts[2:-2]]
+        if cells[0].isdigit() or not rows:
+            rows.append(cells)
+        else:
+            rows[-1] = [f"{a} {b}".strip() for a, b in zip(rows[-1], cells)]
+    return rows
+
+
 def test_synth_show_program_eval_smoke(tmp_path):
     run(["train", "task=random-grid", "budget=tiny"], tmp_path)
     run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
-    out = tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1"
+    tag = run_dir("synth", tmp_path, "task=random-grid", "budget=tiny").program_tag  # the default search's
+    out = tmp_path / "random-grid/tiny/seed0/synth" / tag
     text = (out / "program.txt").read_text()
     from neurosym_cli.dsl import parse
 
@@ -185,15 +203,17 @@ def test_synth_show_program_eval_smoke(tmp_path):
 
     flat = " ".join(p.stdout.replace("│", " ").split())  # rich pads and wraps cells; compare the words
     vocab = feature_map("formation").vocab
-    for rule in prog.rounds[0]:  # every rule, in the paper's notation and read out
-        assert rule_text(rule) in flat and describe(rule, vocab) in flat, (rule_text(rule), p.stdout)
+    rows = _rule_rows(p.stdout)
+    assert len(rows) == len(prog.rounds[0]), p.stdout
+    for rule, row in zip(prog.rounds[0], rows):  # every rule, in the paper's notation and read out, in its row
+        assert row[1] == rule_text(rule) and describe(rule, vocab) in row[3], (row, p.stdout)
     assert f"objective {summary['rounds'][0]['objective']:.4f}" in flat
     p = run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path)
-    m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-k2-lam0.5-v1/metrics.json").read_text())
+    m = json.loads((tmp_path / f"random-grid/tiny/seed0/eval/prog-{tag}/metrics.json").read_text())
     assert m["summary"]["max_in"]["mean"] <= 2.0
     # det-prog: argmax rules only
     run(["synth", "task=random-grid", "budget=tiny", "baseline=det-prog"], tmp_path)
-    det = parse((tmp_path / "random-grid/tiny/seed0/synth/det-k2-lam0.5-v1/program.txt").read_text())
+    det = parse((tmp_path / f"random-grid/tiny/seed0/synth/det-{tag}/program.txt").read_text())
     assert det.deterministic
     # an existing program is reused; overwrite=true searches again: same seed, same program, byte for byte
     p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
@@ -215,7 +235,8 @@ def test_synth_two_rounds_and_sweep(tmp_path):
     base = tmp_path / "unlabeled-goals/tiny/seed0/synth"
     for k in (1, 2):
         for lam in (0.3, 0.7):
-            p = parse((base / f"k{k}-lam{lam}-v1/program.txt").read_text())
+            tag = run_dir("synth", tmp_path, "task=unlabeled-goals", "budget=tiny", f"rules={k}", f"lam={lam}")
+            p = parse((base / tag.program_tag / "program.txt").read_text())
             assert p.n_rounds == 2 and all(len(r) == k for r in p.rounds)
     assert len(list(base.glob("dataset-*.pt"))) == 1  # collected once, reused by the sweep
 
@@ -258,7 +279,8 @@ def test_report_needs_no_torch(tmp_path):
 
 
 def test_show_program_of_a_run_with_a_front_needs_no_torch(tmp_path):
-    synth = tmp_path / "random-grid" / "tiny" / "seed0" / "synth" / "k2-lam0.5-v1"
+    tag = run_dir("show_program", tmp_path, "task=random-grid", "budget=tiny").program_tag  # what show-program reads
+    synth = tmp_path / "random-grid" / "tiny" / "seed0" / "synth" / tag
     synth.mkdir(parents=True)
     silent, near = "random(filter(false, l))", "argmax(map(-1.0*d, filter(true, l)))"
     (synth / "program.txt").write_text(f"{near}\n{near}\n")
@@ -284,12 +306,13 @@ def test_retrain_smoke(tmp_path):
     assert p.returncode != 0 and "neurosym synth task=random-grid" in p.stderr  # needs the program first
     run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
     run(["retrain", "task=random-grid", "budget=tiny"], tmp_path)
-    assert (tmp_path / "random-grid/tiny/seed0/train/retrained-k2-lam0.5-v1/model.pt").exists()
+    tag = run_dir("retrain", tmp_path, "task=random-grid", "budget=tiny").program_tag  # the default search's
+    assert (tmp_path / f"random-grid/tiny/seed0/train/retrained-{tag}/model.pt").exists()
     run(["eval", "task=random-grid", "budget=tiny", "baseline=prog-retrained"], tmp_path)
-    m = json.loads((tmp_path / "random-grid/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1/metrics.json").read_text())
+    m = json.loads((tmp_path / f"random-grid/tiny/seed0/eval/prog-retrained-{tag}/metrics.json").read_text())
     assert m["summary"]["max_in"]["mean"] <= 2.0
     # the same rules under new comments: still the same program, nothing to do
-    prog = tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt"
+    prog = tmp_path / f"random-grid/tiny/seed0/synth/{tag}/program.txt"
     prog.write_text("# edited by hand\n" + prog.read_text())
     assert "already trained" in run(["retrain", "task=random-grid", "budget=tiny"], tmp_path).stdout
     # another program under the same name (its summary records the searched one): neither retrained nor evaluated
@@ -306,12 +329,14 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
     p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path, plots=True)
     assert "pipeline done" in p.stdout
     exp = tmp_path / "random-grid/tiny/seed0"
-    for label in ("tf-full", "dist-k2", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1", "dt-k2-v1",
-                  "dt-retrained-k2-v1"):
+    # prog and prog-retrained run under the program the front selection picked (pipeline.select=front)
+    picked = picked_labels(tmp_path, "task=random-grid", "budget=tiny")
+    for label in ("tf-full", "dist-k2", picked["prog"], picked["prog-retrained"], "dt-k2-v1", "dt-retrained-k2-v1"):
         assert (exp / "eval" / label / "metrics.json").exists(), label
     assert (exp / "eval/figure2.png").stat().st_size > 1000
     timings = json.loads((exp / "pipeline_timings.json").read_text())
-    assert {"train tf-full", "synth prog", "retrain prog-retrained", "eval dt"} <= set(timings)
+    pick = Path(front_pick(tmp_path, "task=random-grid", "budget=tiny")["program_file"])
+    assert {"train tf-full", "synth prog", f"retrain prog-retrained {pick.stem}", "eval dt"} <= set(timings)
     p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path)
     # every training (train and retrain) and every search of the plan finds its artifact and does nothing
     from neurosym_cli.stages.graph import plan
@@ -319,8 +344,11 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
     stages = plan(base.split("=")[1].strip("[]").split(","))
     trainings = [s for s in stages if s.verb in ("train", "retrain")]  # tf-full, dist, prog- and dt-retrained
     assert len(trainings) == 4
-    assert p.stdout.count("already trained") == len(trainings)
-    assert p.stdout.count("already synthesized") == len([s for s in stages if s.verb == "synth"]) == 2
+    # ... and so does the front selection's: the oracle, no-comm, a retraining per candidate, prog's search
+    search = run_dir("synth", tmp_path, "task=random-grid", "budget=tiny")
+    candidates = json.loads(search.front_choice_file(search.program_tag).read_text())["candidates"]
+    assert p.stdout.count("already trained") == len(trainings) + 2 + len(candidates)
+    assert p.stdout.count("already synthesized") - 1 == len([s for s in stages if s.verb == "synth"]) == 2
     # a rerun reuses the artifacts and keeps the time each took to make
     assert json.loads((exp / "pipeline_timings.json").read_text())["train tf-full"] == timings["train tf-full"]
 
@@ -338,7 +366,8 @@ def test_per_seed_pipelines_and_report(tmp_path):
     assert (tmp_path / "random-grid/tiny/seed1/report.png").exists()
     rep = json.loads((tmp_path / "random-grid/tiny/report.json").read_text())["tasks"]["random-grid"]
     assert set(rep["baselines"]) == {"tf-full", "prog"} and rep["seeds"] == [0, 1]
-    assert rep["baselines"]["prog"]["labels"] == ["prog-k2-lam0.5-v1"] * 2
+    assert rep["baselines"]["prog"]["labels"] == [  # each seed's prog runs under its own front's pick
+        picked_labels(tmp_path, "task=random-grid", "budget=tiny", f"seed={s}")["prog"] for s in (0, 1)]
     assert rep["baselines"]["tf-full"]["train_seeds"] == 2 and rep["baselines"]["tf-full"]["cost"]["ci95"] > 0
     for png in ("report.png", "report_curves.png", "pareto.png", "seeds-random-grid.png"):
         assert (tmp_path / "random-grid/tiny" / png).stat().st_size > 1000, png
