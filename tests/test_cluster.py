@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT
+from conftest import PAPER_METHOD, ROOT, run_dir
 from test_cli import run
 
 
@@ -67,9 +67,11 @@ def test_swept_keys_and_job_prefix(monkeypatch):
 
 def test_submitit_local_two_seed_sweep_then_report(tmp_path):
     """The cluster path end to end on this machine: submitit's local executor runs one pipeline per seed as its own
-    process (as SLURM would), then `neurosym report` aggregates the jobs' run directories."""
+    process (as SLURM would), then `neurosym report` aggregates the jobs' run directories. The paper's method
+    (PAPER_METHOD: the program's labels are its tag's, not the front pick's): the launcher is what is tested."""
     p = run(["pipeline", "-m", "seed=0,1", "budget=tiny", "task=random-grid", "threads=1",
-             "baselines=[tf-full,prog,prog-retrained]", "hydra/launcher=slurm_local"], tmp_path, timeout=600)
+             "baselines=[tf-full,prog,prog-retrained]", "hydra/launcher=slurm_local", *PAPER_METHOD], tmp_path,
+            timeout=600)
     for s in (0, 1):
         exp = tmp_path / f"random-grid/tiny/seed{s}"
         for label in ("tf-full", "prog-k2-lam0.5-v1", "prog-retrained-k2-lam0.5-v1"):
@@ -104,7 +106,8 @@ def test_tensorboard_logs_every_training_and_search_step(tmp_path):
         hist = list(csv.DictReader(f))
     assert [s for s, _ in tb["train/loss"]] == [1, 2]  # tiny budget: 8 rollouts, 4 per step
     assert [v for _, v in tb["train/loss"]] == pytest.approx([float(h["loss"]) for h in hist])
-    run(["synth", "budget=tiny", "task=random-grid", "logger=tensorboard"], tmp_path)
+    # the paper's MCMC (PAPER_METHOD): the tiny budget's 30 proposals, one step each (the hybrid search's vary)
+    run(["synth", "budget=tiny", "task=random-grid", "logger=tensorboard", *PAPER_METHOD], tmp_path)
     tb = _scalars(exp / "tensorboard/synth-k2-lam0.5-v1")
     best = [v for _, v in tb["search/best"]]
     assert len(best) == 30 and all(b <= a + 1e-6 for a, b in zip(best, best[1:]))  # best never gets worse
@@ -196,7 +199,9 @@ def test_search_view_labels_progress_and_summary(caplog):
             for step in range(1, 11):
                 d.update(step, res, {"phase": "final"})
     lines = [r.getMessage() for r in caplog.records]
-    assert lines[0].startswith("synth t step 1/10 (0:00 elapsed, 0:00 left)  best objective 3.0000 = L1 2.0000")
+    # the first step is the warm-up, which measures no pace (utils/console.Eta): the time left is known from the second
+    assert lines[0].startswith("synth t step 1/10 (0:00 elapsed, ? left)  best objective 3.0000 = L1 2.0000")
+    assert lines[1].startswith("synth t step 2/10 (0:00 elapsed, 0:00 left)  best objective 3.0000 = L1 2.0000")
     assert "accepted per move: rule=0% threshold=25%" in lines[-1]
     view = cons.SearchDisplay("synth t", 10, 0.5, rich=True, moves=MOVE_HELP)
     rec = Console(record=True, width=300)
@@ -233,7 +238,8 @@ def test_a_sweep_job_with_a_missing_upstream_fails_alone(tmp_path):
     run(["train", "budget=tiny", "task=random-grid"], tmp_path)  # seed 0's oracle only
     p = run(["synth", "-m", "seed=0,1", "budget=tiny", "task=random-grid"], tmp_path, check=False)
     assert p.returncode == 1  # a failed job fails the command ...
-    assert (tmp_path / "random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt").exists()  # ... not the others
+    tag = run_dir("synth", tmp_path, "budget=tiny", "task=random-grid").program_tag  # the default search's
+    assert (tmp_path / f"random-grid/tiny/seed0/synth/{tag}/program.txt").exists()  # ... not the others
     out = p.stdout + p.stderr
     assert "Traceback" not in out
     assert "[seed=1] neurosym synth: error: no checkpoint" in out and "neurosym train task=random-grid" in out
@@ -241,7 +247,7 @@ def test_a_sweep_job_with_a_missing_upstream_fails_alone(tmp_path):
     results = sorted((tmp_path / "multirun/synth").glob("*/*/job_result.json"))
     outcome = {json.loads(f.read_text())["job"]: json.loads(f.read_text()) for f in results}
     assert outcome[0]["ok"] and set(outcome[0]["row"]) == {"objective", "l1", "max in+out on D", "artifact"}
-    assert outcome[0]["row"]["artifact"].endswith("random-grid/tiny/seed0/synth/k2-lam0.5-v1/program.txt")
+    assert outcome[0]["row"]["artifact"].endswith(f"random-grid/tiny/seed0/synth/{tag}/program.txt")
     assert not outcome[1]["ok"] and "no checkpoint" in outcome[1]["error"]
 
 
