@@ -6,6 +6,7 @@ import pytest
 from hydra import compose, initialize_config_module
 
 import neurosym_cli.commands.apps  # noqa: F401  (registers the schema)
+from conftest import PAPER_METHOD
 from neurosym_cli.schemes import SCHEMES as BASELINES
 from neurosym_cli.config import ConfigError, RunConfig
 from neurosym_cli.commands._run import typed_config
@@ -67,8 +68,10 @@ def test_paper_budget():
 def test_hinge_programs_do_not_share_the_paper_objectives_place():
     from neurosym_cli.run import RunDir, synth_command
 
-    paper = typed_config(_compose("synth", ["task=random-grid", "baseline=prog"]))
-    hinge = typed_config(_compose("synth", ["task=random-grid", "baseline=prog", "synth.objective=hinge"]))
+    # the paper's method (PAPER_METHOD): the objective's suffix alone, without the default hybrid search's
+    paper = typed_config(_compose("synth", ["task=random-grid", "baseline=prog", *PAPER_METHOD]))
+    hinge = typed_config(_compose("synth", ["task=random-grid", "baseline=prog", "synth.objective=hinge",
+                                            *PAPER_METHOD]))
     assert RunDir(paper).program_tag == "k2-lam0.5-v1" and RunDir(hinge).program_tag == "k2-lam0.5-v1-hinge"
     assert RunDir(paper).synth_dir != RunDir(hinge).synth_dir
     assert "synth.objective=hinge" in synth_command(hinge)
