@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import neurosym_cmd
+from conftest import neurosym_cmd, run_dir
 from fault_helpers import GOOD, one_line_error, run
 from neurosym_cli.utils.io import ArtifactError, write_text
 from neurosym_cli.utils.lock import run_lock
@@ -51,11 +51,12 @@ def test_hand_written_program_never_overwrites_the_synthesized_one(tmp_path):
     run(["synth", "task=random-grid", "budget=tiny"], tmp_path)
     run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path)
     exp = tmp_path / "random-grid/tiny/seed0"
-    synthesized = (exp / "eval/prog-k2-lam0.5-v1/metrics.json").read_text()
+    tag = run_dir("synth", tmp_path, "task=random-grid", "budget=tiny").program_tag  # the default search's
+    synthesized = (exp / f"eval/prog-{tag}/metrics.json").read_text()
     mine = tmp_path / "mine.txt"
     mine.write_text("random(filter(true, l))\nrandom(filter(true, l))\n")
     run(["eval", "task=random-grid", "baseline=prog", "budget=tiny", f"program={mine}"], tmp_path)
-    assert (exp / "eval/prog-k2-lam0.5-v1/metrics.json").read_text() == synthesized
+    assert (exp / f"eval/prog-{tag}/metrics.json").read_text() == synthesized
     mine_dirs = [p.name for p in (exp / "eval").glob("prog-file-mine-*")]
     assert len(mine_dirs) == 1 and mine_dirs[0].endswith("-v1")
     # another text under the same name is another result
@@ -73,13 +74,13 @@ def test_hand_written_program_never_overwrites_the_synthesized_one(tmp_path):
     one_line_error(run(["synth", "task=random-grid", "budget=tiny", f"program={mine}"], tmp_path, check=False),
                    "program= is for eval")
     # a corrupt synthesized program is an error that says how to make it again, never "already synthesized"
-    (exp / "synth/k2-lam0.5-v1/program.txt").write_text("random(filter(d >=, l))\n")
+    (exp / f"synth/{tag}/program.txt").write_text("random(filter(d >=, l))\n")
     p = run(["synth", "task=random-grid", "budget=tiny"], tmp_path, check=False)
     one_line_error(p, "overwrite=true")
     one_line_error(run(["eval", "task=random-grid", "baseline=prog", "budget=tiny"], tmp_path, check=False),
                    "overwrite=true")
-    (exp / "synth/k2-lam0.5-v1/summary.json").write_text('{"rounds": 7, "lam": "x"}')
-    (exp / "synth/k2-lam0.5-v1/program.txt").write_text(GOOD.replace("theta", "dy").replace("gd", "gx"))
+    (exp / f"synth/{tag}/summary.json").write_text('{"rounds": 7, "lam": "x"}')
+    (exp / f"synth/{tag}/program.txt").write_text(GOOD.replace("theta", "dy").replace("gd", "gx"))
     p = run(["show-program", "task=random-grid", "budget=tiny"], tmp_path)  # a summary of another shape: no terms
     assert "argmax(map(" in p.stdout
     (exp / "eval/tf-full").mkdir(parents=True, exist_ok=True)
