@@ -11,6 +11,7 @@ from typing import Callable
 
 import pytest
 
+from conftest import run_dir
 from fault_helpers import EXP, TINY, one_line_error, run
 from neurosym_cli.utils.io import ArtifactError
 
@@ -44,7 +45,8 @@ def test_a_hand_written_programs_metrics_record_its_own_k(runs):
     (out,) = (runs / EXP / "eval").glob("prog-file-three-*/metrics.json")
     assert json.loads(out.read_text())["rules"] == 3
     run(["eval", "baseline=prog", *TINY], runs)  # the synthesized program's is its search's K
-    assert json.loads((runs / EXP / "eval/prog-k2-lam0.5-v1/metrics.json").read_text())["rules"] == 2
+    label = run_dir("eval", runs, "baseline=prog", *TINY).label  # prog- and the default search's tag
+    assert json.loads((runs / EXP / f"eval/{label}/metrics.json").read_text())["rules"] == 2
 
 
 def test_no_nan_from_a_finite_model_or_a_nan_dataset(runs):
@@ -270,7 +272,8 @@ def test_corrupt_json_artifacts_name_the_command_that_writes_them_again(runs, co
     (exp / "eval/tf-full/metrics.json").write_text(content)  # read by the table every eval prints
     one_line_error(run(["eval", "baseline=prog", *TINY], runs, check=False),
                    "delete it and run `neurosym pipeline task=random-grid budget=tiny seed=0`")
-    (exp / "synth/k2-lam0.5-v1/summary.json").write_text(content)  # select reads every round's time
+    tag = run_dir("synth", runs, *TINY).program_tag  # the default search's
+    (exp / f"synth/{tag}/summary.json").write_text(content)  # select reads every round's time
     cfg = dataclasses.replace(ns.compose("synth", task="random-grid", budget="tiny"), runs_root=str(runs),
                               exp_dir=str(exp))
     with pytest.raises(ArtifactError, match=r"delete it and run `neurosym synth .* overwrite=true`"):

@@ -11,7 +11,6 @@ from fault_helpers import GOOD, TINY, run
 from test_plugins import one_line
 
 EXP = "random-grid/tiny/seed0"
-TAG = "synth/k2-lam0.5-v1"
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +34,13 @@ def _synth_cfg(runs, **kw):
     return ns.compose("synth", task="random-grid", budget="tiny", threads=1, runs_root=str(runs), **kw)
 
 
+def _synth_dir(runs, **kw):
+    """synth/<tag> of the search `neurosym synth` makes (its tag: K, lambda, features, the default search's)."""
+    from neurosym_cli.run import RunDir
+
+    return RunDir(_synth_cfg(runs, **kw)).synth_dir
+
+
 @pytest.mark.parametrize("stop_at", ["write_csv", "write_json"])
 def test_a_ctrl_c_between_the_writes_never_leaves_a_program_without_its_summary(runs, monkeypatch, stop_at):
     """The program was written first: a Ctrl-C before summary.json left it alone (or beside the old search's
@@ -43,7 +49,7 @@ def test_a_ctrl_c_between_the_writes_never_leaves_a_program_without_its_summary(
     import neurosym_cli.stages.synth as synth
     from neurosym_cli.stages import RunInfo
 
-    out = runs / EXP / TAG
+    out = _synth_dir(runs)
     before = (out / "program.txt").read_text()
 
     def interrupt(*a, **k):
@@ -62,7 +68,7 @@ def test_a_ctrl_c_between_the_writes_never_leaves_a_program_without_its_summary(
 def test_a_program_without_its_search_summary_is_refused_by_the_verbs_that_run_it(runs):
     """A program.txt alone (an older version's Ctrl-C) or beside another search's summary: one line naming the
     search that remakes it; show-program shows its rules without terms and says why; synth searches it again."""
-    out = runs / EXP / TAG
+    out = _synth_dir(runs)
     summary = (out / "summary.json").read_text()
     (out / "summary.json").unlink()
     for verb in (["eval", "baseline=prog"], ["retrain"], ["render", "baseline=prog"]):
@@ -114,7 +120,7 @@ SHAPES = {
 def test_show_program_reads_summaries_of_any_shape_without_a_traceback(runs):
     """rule_stats, simplified, hall_of_fame and config of other types were a traceback; the whole summary of
     another shape is now one warning line naming the search that writes it again."""
-    out = runs / EXP / TAG
+    out = _synth_dir(runs)
     good = json.loads((out / "summary.json").read_text())
     for name, change in SHAPES.items():
         (out / "summary.json").write_text(json.dumps(_round(good, **change)))
@@ -146,7 +152,7 @@ def test_a_sweep_directory_outside_the_runs_root_runs_every_job(runs, tmp_path_f
     assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
     results = sorted(elsewhere.glob("*/job_result.json"))
     assert len(results) == 2 and all(json.loads(r.read_text())["ok"] for r in results)
-    assert (runs / EXP / "synth/k2-lam0.7-v1/program.txt").exists()
+    assert (_synth_dir(runs, lam=0.7) / "program.txt").exists()
 
 
 def test_a_huge_defaults_file_is_refused_before_it_is_parsed(tmp_path):
