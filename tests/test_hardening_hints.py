@@ -6,6 +6,7 @@ import shlex
 
 import pytest
 
+from conftest import run_dir
 from test_plugins import one_line, run
 
 TINY = ["task=two-groups-cross", "budget=tiny", "threads=1", "plots=false"]
@@ -49,7 +50,8 @@ def test_figures_refuse_an_agent_or_a_step_beyond_the_episode(oracle_run):
         assert p.returncode == 2 and needle in one_line(p), p.stderr
         assert not figures.exists() or not any(figures.iterdir())  # nothing drawn before the refusal
     p = run(["figures", *TINY, "render.baselines=[tf-full]", "render.agent=9", "render.step=7"], oracle_run)
-    assert (figures / "attention-k2-lam0.5-v1-episode0.png").is_file()  # the last agent and step are drawn
+    tag = run_dir("synth", oracle_run, *TINY).program_tag  # the figures are named after the run's program
+    assert (figures / f"attention-{tag}-episode0.png").is_file()  # the last agent and step are drawn
 
 
 def test_render_refuses_an_episode_beyond_the_evaluation(oracle_run):
@@ -107,10 +109,12 @@ def test_several_missing_stages_are_named_at_once_with_the_pipeline_that_runs_th
     pipeline = line.split("; or `", 1)[1].split("`", 1)[0]
     assert pipeline.startswith("neurosym pipeline ") and "baselines=[prog-retrained]" in pipeline
     run([*shlex.split(pipeline)[1:], "threads=1", "plots=false"], tmp_path)  # runs as printed
-    assert (tmp_path / "two-groups-cross/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1/metrics.json").is_file()
+    # ... and makes what retrain and eval needed: the searched program's retraining (not the front's pick's)
+    retrained = run_dir("eval", tmp_path, *TINY, "baseline=prog-retrained")
+    assert (tmp_path / "two-groups-cross/tiny/seed0/eval" / retrained.label / "metrics.json").is_file()
     run(["eval", *TINY, "baseline=prog-retrained"], tmp_path)
     # one stage missing: its reader's own line, as before
-    (tmp_path / "two-groups-cross/tiny/seed0/train/retrained-k2-lam0.5-v1/model.pt").unlink()
+    retrained.model_file.unlink()
     line = one_line(run(["eval", *TINY, "baseline=prog-retrained"], tmp_path, check=False))
     assert "no checkpoint at" in line and "create it with `neurosym retrain " in line, line
 

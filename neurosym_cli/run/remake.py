@@ -81,7 +81,10 @@ def missing_chain(cfg: "RunConfig", verb: str = "eval") -> str | None:
         return None
     lines = [with_run(cfg, s.baseline).command(s.verb, cfg) for s in missing]
     last = with_run(cfg, needed[-1].baseline).command(needed[-1].verb, cfg)  # carries the baseline's settings
-    pipeline = ("neurosym pipeline " + last.split(" ", 2)[2] + " "
+    # the searched program itself: pipeline.select=front would run a program baseline under the front's pick
+    # (another label and retrained model), never making what this command needs
+    own = " pipeline.select=none" if cfg.baseline.has_program and cfg.pipeline.select != "none" else ""
+    pipeline = ("neurosym pipeline " + last.split(" ", 2)[2] + own + " "
                 + shlex.quote(f"baselines=[{cfg.baseline.name}]"))
     what = f"{cfg.baseline.name}" if verb == "eval" else f"{verb} of {cfg.baseline.name}"
     return (f"{what} needs {len(missing)} stages that have not run in {cfg.exp_dir}: "
