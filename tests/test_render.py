@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import torch
 
+from conftest import PAPER_METHOD
 from test_cli import run
 
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.41, l))\n"
@@ -139,28 +140,33 @@ def test_animation_frames_and_static_picture(tmp_path):
         assert n == 5 and mp4.stat().st_size > 1000 and mp4.read_bytes()[4:8] == b"ftyp"
 
 
+TINY = ["task=two-groups-cross", "budget=tiny", *PAPER_METHOD]
+
+
 def test_render_and_figures_from_a_tiny_run(tmp_path):
+    """The paper's method (PAPER_METHOD) throughout: render's and figures' own baseline, prog-retrained, is the
+    searched program's retraining, which a pipeline under pipeline.select=front (the front's pick) does not make."""
     base = "baselines=[tf-full,hard-attn,dist,prog,prog-retrained]"
-    run(["pipeline", "task=two-groups-cross", "budget=tiny", base], tmp_path)
-    p = run(["render", "task=two-groups-cross", "budget=tiny", "episode=1", "render.every=2"], tmp_path)
+    run(["pipeline", *TINY, base], tmp_path)
+    p = run(["render", *TINY, "episode=1", "render.every=2"], tmp_path)
     out = tmp_path / "two-groups-cross/tiny/seed0/render/prog-retrained-k2-lam0.5-v1"
     from PIL import Image
 
     assert Image.open(out / "episode1.gif").n_frames == 5  # tiny horizon 8: steps 0, 2, 4, 6, 8
     assert (out / "episode1.png").stat().st_size > 5000 and "rendered" in p.stdout
-    run(["render", "task=two-groups-cross", "budget=tiny", "baseline=tf-full"], tmp_path)
+    run(["render", *TINY, "baseline=tf-full"], tmp_path)
     assert (tmp_path / "two-groups-cross/tiny/seed0/render/tf-full/episode0.gif").exists()
     # a zoom is its own picture, beside the whole one, not over it
-    p = run(["render", "task=two-groups-cross", "budget=tiny", "episode=1", "render.window=[5,7.5,-1,1]"], tmp_path)
+    p = run(["render", *TINY, "episode=1", "render.window=[5,7.5,-1,1]"], tmp_path)
     assert Image.open(out / "episode1-window5_7.5_-1_1.gif").n_frames == 9 and "window" in p.stdout
     assert Image.open(out / "episode1.gif").n_frames == 5
-    p = run(["show-program", "task=two-groups-cross", "budget=tiny"], tmp_path)
+    p = run(["show-program", *TINY], tmp_path)
     assert "fires" in p.stdout and "if removed" in p.stdout and "%" in p.stdout  # rule statistics from summary
     summary = json.loads((tmp_path / "two-groups-cross/tiny/seed0/synth/k2-lam0.5-v1/summary.json").read_text())
     stats = summary["rounds"][0]["rule_stats"]
     assert len(stats) == len(summary["program"].strip().splitlines())
     assert all(0.0 <= s["fires"] <= 1.0 and 0.0 <= s["edge_share"] <= 1.0 for s in stats)
-    p = run(["figures", "task=two-groups-cross", "budget=tiny", "render.agent=3"], tmp_path)
+    p = run(["figures", *TINY, "render.agent=3"], tmp_path)
     figs = tmp_path / "two-groups-cross/tiny/seed0/figures"
     for name in ("attention-k2-lam0.5-v1-episode0.png", "trajectories-k2-lam0.5-v1.png", "figure1-k2-lam0.5-v1.png",
                  "rules-k2-lam0.5-v1-episode0.png"):
@@ -172,9 +178,9 @@ def test_render_and_figures_from_a_tiny_run(tmp_path):
                          (["render.window=[1,0,0,1]"], "x0 < x1 and y0 < y1"),
                          (["render.window=[1,2,3]"], "render.window must be [x0, x1, y0, y1]"),
                          (["render.window=[1000,1001,0,1]"], "no agent of episode 0 enters render.window")):
-        p = run(["render", "task=two-groups-cross", "budget=tiny", *args], tmp_path, check=False)
+        p = run(["render", *TINY, *args], tmp_path, check=False)
         assert p.returncode != 0 and needle in p.stderr and "Traceback" not in p.stderr, p.stderr
-    p = run(["render", "task=two-groups-cross", "budget=tiny", "baseline=no-comm"], tmp_path, check=False)
+    p = run(["render", *TINY, "baseline=no-comm"], tmp_path, check=False)
     assert p.returncode != 0 and "neurosym train" in p.stderr  # names the command that makes the model
 
 

@@ -4,6 +4,7 @@ import json
 
 import torch
 
+from conftest import PAPER_METHOD
 from test_cli import run
 
 
@@ -81,11 +82,13 @@ def test_link_failure_runs_live_apart_and_train_with_failures(tmp_path):
 
 
 def test_stress_command_on_a_tiny_run(tmp_path):
+    # the paper's method (PAPER_METHOD): stress's prog-retrained is the searched program's retraining, which a
+    # pipeline under pipeline.select=front (the front's pick) does not make
     run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "rules=1",
-         "baselines=[tf-full,prog,prog-retrained]"], tmp_path)
-    p = run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "rules=1", "stress.agents=[3,20]",
-             "stress.failure=[0,0.5]", "stress.seeds=2", "stress.baselines=[tf-full,prog-retrained,dist]"], tmp_path,
-            plots=True)
+         "baselines=[tf-full,prog,prog-retrained]", *PAPER_METHOD], tmp_path)
+    p = run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "rules=1", *PAPER_METHOD,
+             "stress.agents=[3,20]", "stress.failure=[0,0.5]", "stress.seeds=2",
+             "stress.baselines=[tf-full,prog-retrained,dist]"], tmp_path, plots=True)
     out = tmp_path / "two-groups-cross/tiny/seed0/stress"
     res = json.loads((out / "stress.json").read_text())
     assert (out / "stress.png").exists() and (out / "stress.csv").exists()
