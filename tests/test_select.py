@@ -6,6 +6,7 @@ import random
 import pytest
 import torch
 
+from conftest import PAPER_METHOD
 from test_cli import run
 
 
@@ -120,10 +121,12 @@ def test_patience_ends_stalled_phases_and_coarse_restarts_are_rescored_on_the_wh
 # --- the command ------------------------------------------------------------------------------------------------
 
 def test_select_end_to_end_then_selected_true(tmp_path):
+    """The paper's method (PAPER_METHOD), appendix B's selection: the pipeline of selected=true then runs the selected
+    program itself (pipeline.select=front would run a pick among its front; tests/test_search_keys.py: hybrid)."""
     run(["train", "task=two-groups-cross", "budget=tiny", "threads=1"], tmp_path)
     p = run(["select", "task=two-groups-cross", "budget=tiny", "threads=1", "select.lam=[0.3,1.0]",
              "select.rules=[1,2]", "select.features=[v1]", "budget.val_seeds=3", "select.jobs=2",
-             "select.finalists=2"], tmp_path, timeout=600)
+             "select.finalists=2", *PAPER_METHOD], tmp_path, timeout=600)
     exp = tmp_path / "two-groups-cross/tiny/seed0"
     rec = json.loads((exp / "select/selected.json").read_text())
     sel = json.loads((exp / "select/selection.json").read_text())
@@ -135,11 +138,11 @@ def test_select_end_to_end_then_selected_true(tmp_path):
                                              {f["name"] for f in finalists})
     lines = (exp / "select/selection.csv").read_text().splitlines()
     assert len(lines) == 5 and "val_loss" in lines[0] and "picked" in lines[0]
-    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "baselines=[prog-retrained]", "selected=true"],
-            tmp_path)
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "baselines=[prog-retrained]", "selected=true",
+             *PAPER_METHOD], tmp_path)
     assert f"rules={rec['rules']} lam={rec['lam']:g}" in p.stdout and "already trained" in p.stdout + p.stderr
     assert f"prog-retrained-{rec['name']}" in p.stdout  # the results table names the selected program
-    p = run(["show-program", "task=two-groups-cross", "budget=tiny", "selected=true"], tmp_path)
+    p = run(["show-program", "task=two-groups-cross", "budget=tiny", "selected=true", *PAPER_METHOD], tmp_path)
     assert "hall of fame by complexity" in p.stdout and "search's pick" in p.stdout
 
 
