@@ -8,7 +8,7 @@ import textwrap
 
 import pytest
 
-from conftest import ROOT, neurosym_cmd
+from conftest import ROOT, neurosym_cmd, run_dir
 
 RING = ROOT / "examples" / "ring" / "conf"
 
@@ -42,13 +42,16 @@ def test_the_ring_example_runs_every_verb_from_outside_the_package(tmp_path):
     assert payload["arch"]["obs_dim"] == 4 and payload["arch"]["pair_dim"] == 4
     assert payload["config"]["task"]["radius"] == 3.5 and payload["config"]["task"]["_target_"] == "ring.RingTask"
     run(["synth", *cd, *common, "task.radius=3.5"], tmp_path)
-    program = (tmp_path / "ring/tiny/seed0/synth/k2-lam0.5-v1-scaled/program.txt").read_text()
+    ring = run_dir("synth", tmp_path, *common, "task.radius=3.5", config_dir=RING)  # the task's objective, search's
+    assert ring.program_tag.startswith("k2-lam0.5-v1-scaled")
+    program = (ring.synth_dir / "program.txt").read_text()
     from neurosym_cli.dsl import parse
 
     assert len(parse(program).rounds[0]) >= 1
     run(["retrain", *cd, *common, "task.radius=3.5"], tmp_path)
     p = run(["eval", *cd, *common, "task.radius=3.5", "baseline=prog-retrained"], tmp_path)
-    m = json.loads((tmp_path / "ring/tiny/seed0/eval/prog-retrained-k2-lam0.5-v1-scaled/metrics.json").read_text())
+    retrained = run_dir("eval", tmp_path, *common, "task.radius=3.5", "baseline=prog-retrained", config_dir=RING)
+    m = json.loads((retrained.eval_dir() / "metrics.json").read_text())
     assert set(m["summary"]) >= {"cost", "max_in", "collisions"} and m["summary"]["cost"]["mean"] > 0
     # a resumed model under another task config is refused, naming the key
     p = run(["train", *cd, *common, "task.radius=5.0", "budget.train_rollouts=16"], tmp_path, check=False)
@@ -60,7 +63,8 @@ def test_the_ring_example_runs_every_verb_from_outside_the_package(tmp_path):
     # a joblib sweep: the workers import the user's module by themselves (nothing is registered at run time)
     p = run(["synth", "-m", *cd, *common, "task.radius=3.5", "rules=1,2", "hydra/launcher=joblib",
              "hydra.launcher.n_jobs=2"], tmp_path)
-    assert (tmp_path / "ring/tiny/seed0/synth/k1-lam0.5-v1-scaled/program.txt").exists()
+    assert (run_dir("synth", tmp_path, *common, "task.radius=3.5", "rules=1", config_dir=RING).synth_dir
+            / "program.txt").exists()
 
 
 @pytest.mark.slow
