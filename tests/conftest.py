@@ -39,13 +39,13 @@ from benchmarks.run_seeds import PAPER_METHOD  # noqa: E402,F401  (written there
 # rather than today's (the hybrid search's k2-lam0.5-v1-hybrid; the pipeline's prog under the front's pick).
 
 
-def run_dir(cmd: str, runs, *overrides: str):
+def run_dir(cmd: str, runs, *overrides: str, config_dir=None):
     """The RunDir of the config `neurosym <cmd> <overrides>` composes under the runs root ``runs`` (its program's
-    tag, label, model and files as the command names them)."""
+    tag, label, model and files as the command names them); ``config_dir``: its --config-dir (a plugin task)."""
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.run import RunDir
 
-    return RunDir(compose_config(cmd, [f"runs_root={runs}", *overrides]))
+    return RunDir(compose_config(cmd, [f"runs_root={runs}", *overrides], config_dir=config_dir))
 
 
 def front_pick(runs, *overrides: str) -> dict:
