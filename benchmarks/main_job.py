@@ -1,14 +1,17 @@
 """The README's main job over training seeds: run it, then collect its small result files.
 
-    neurosym pipeline task=two-groups-cross -m seed=0,1,2 runs_root=/tmp/mainjob      # about 3 min a seed
+    neurosym pipeline task=two-groups-cross -m seed=0,1,2,3,4,5,6,7,8,9 runs_root=/tmp/mainjob   # about 5 min a seed
     python benchmarks/main_job.py /tmp/mainjob                                         # docs/results/main-job/
 
-A variant beside it (issue 37: the pipeline choosing among the degree-budget front), collected seed by seed across
-sessions (seeds already in seeds.json stay; run directories are not kept between sessions):
+The defaults since issue 37 (the hybrid search, the degree-budget front and the pipeline's pick among it) make the
+main job; seeds can be collected across sessions (seeds already in seeds.json stay when the command matches; run
+directories are not kept between sessions). The paper's method, as docs/results/main-job-paper-method/ ran it on
+2026-12-03 (two threads then: threads=0 on 2 cores):
 
-    neurosym pipeline task=two-groups-cross seed=S pipeline.select=front synth.front=true runs_root=/tmp/mjf
-    python benchmarks/main_job.py /tmp/mjf --out docs/results/main-job-front \
-        --figure docs/figures/main-job-front-seeds.png --command "pipeline.select=front synth.front=true"
+    neurosym pipeline task=two-groups-cross -m seed=0,1,2 synth.search=mcmc synth.front=false pipeline.select=none \
+        threads=2 runs_root=/tmp/mjp
+    python benchmarks/main_job.py /tmp/mjp --out docs/results/main-job-paper-method \
+        --figure /tmp/mjp/seeds.png --command "synth.search=mcmc synth.front=false pipeline.select=none threads=2"
 
 Writes docs/results/main-job/seeds.json (per training seed: each baseline's summary over the 20 evaluation seeds,
 the programs, the stage timings), report.json, report.csv and improvement.csv (`neurosym report` across the seeds,
@@ -48,7 +51,14 @@ def seed_record(exp: Path) -> dict:
     programs = {p.parent.name: [line for line in p.read_text().splitlines() if line and not line.startswith("#")]
                 for p in run.programs()}
     timings = run.timings_file
-    return {"baselines": baselines, "programs": programs,
+    picks = {}
+    for f in sorted((exp / "select" / "front").glob("*.json")):  # the pipeline's pick among the front
+        c = json.loads(f.read_text())
+        picks[c["tag"]] = {"budget": c["picked"]["budget"], "program": c["picked"]["program"].splitlines(),
+                           "validation_loss": round(c["picked"]["loss_mean"], 5),
+                           "validation_max_in_out": round(c["picked"]["degree"], 5),
+                           "communication_helps": c["communication_helps"], "margin": c.get("margin")}
+    return {"baselines": baselines, "programs": programs, "front_picks": picks,
             "timings": json.loads(timings.read_text()) if timings.exists() else {}}
 
 
