@@ -263,7 +263,8 @@ TASKS = {"random-cross": lambda: _paper("random-cross"), "random-grid": lambda: 
          "swarm": lambda: _paper("swarm"), "swarm-sparse": lambda: _sparse_swarm(),
          "ring": _ring, "consensus": _consensus, "toy": lambda: ToyConfig(),
          "vmas/navigation": lambda: _vmas("vmas/navigation"), "vmas/dispersion": lambda: _vmas("vmas/dispersion"),
-         "vmas/navigation-nolidar": lambda: _vmas("vmas/navigation-nolidar")}
+         "vmas/navigation-nolidar": lambda: _vmas("vmas/navigation-nolidar"),
+         "vmas/navigation-avoid": lambda: _vmas("vmas/navigation-avoid")}
 
 
 def test_the_contract_covers_every_task_yaml():
