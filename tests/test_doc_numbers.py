@@ -91,6 +91,44 @@ def parser_limits() -> tuple[str, ...]:
     return (str(MAX_RULES), str(MAX_DEPTH), f"{MAX_LINE:,}")
 
 
+def _seed0(name: str) -> dict:
+    b = json.loads(MAIN_JOB.read_text())["seeds"]["0"]["baselines"]
+    return next(v for k, v in b.items() if k == name or k.startswith(name + "-"))
+
+
+def seed0_tf_full() -> tuple[str, ...]:
+    """Seed 0 of the main job: tf-full's loss, mean ± 95 % half-width over the evaluation seeds, two decimals."""
+    c = _seed0("tf-full")["cost"]
+    return f"{c['mean']:.2f}", f"{c['ci95']:.2f}"
+
+
+def seed0_prog_retrained() -> tuple[str, ...]:
+    """Seed 0 of the main job: prog-retrained's loss (mean ± half-width) and max in-degree, as the README writes."""
+    c = _seed0("prog-retrained")
+    return f"{c['cost']['mean']:.2f}", f"{c['cost']['ci95']:.2f}", f"{c['max_in']['mean']:.1f}"
+
+
+def seed0_dist_no_comm() -> tuple[str, ...]:
+    """Seed 0 of the main job: dist's and no-comm's mean loss, one decimal."""
+    return f"{_seed0('dist')['cost']['mean']:.1f}", f"{_seed0('no-comm')['cost']['mean']:.1f}"
+
+
+def nine_seed_gap() -> tuple[str, ...]:
+    """The main job's seeds whose oracle learned (tf-full clearly below no-comm): prog-retrained's loss above
+    tf-full's in %, mean ± 95 % t half-width over those training seeds, and the degrees of freedom."""
+    from neurosym_cli.stats import mean_ci
+
+    seeds = json.loads(MAIN_JOB.read_text())["seeds"]
+
+    def of(b: dict, name: str) -> float:
+        return next(v for k, v in b.items() if k == name or k.startswith(name + "-"))["cost"]["mean"]
+
+    gaps = [100 * (of(r["baselines"], "prog-retrained") / of(r["baselines"], "tf-full") - 1)
+            for r in seeds.values() if of(r["baselines"], "tf-full") < 0.8 * of(r["baselines"], "no-comm")]
+    m, h = mean_ci(gaps)
+    return f"{m:.1f}", f"{h:.1f}", str(len(gaps) - 1)
+
+
 @dataclass(frozen=True)
 class Check:
     doc: str  # path from the repository root
@@ -102,6 +140,12 @@ class Check:
 CHECKS = [
     Check("README.md", r"a random agent at least ([\d.]+) away", gif_threshold, times=2),  # the GIF's alt and caption
     Check("README.md", r"within 5 % of tf-full on (\d+) of the (\d+) seeds", within_five),
+    Check("README.md", r"\(tf-full\) has loss ([\d.]+) ± ([\d.]+)", seed0_tf_full),
+    Check("README.md", r"\(prog-retrained\) the loss is ([\d.]+) ± ([\d.]+) while the agent that hears most "
+          r"hears ([\d.]+)", seed0_prog_retrained),
+    Check("README.md", r"\(dist, ([\d.]+)\) or nobody \(no-comm, ([\d.]+)\)", seed0_dist_no_comm),
+    Check("README.md", r"prog-retrained is ([\d.]+) ± ([\d.]+) % above tf-full \(mean ± 95 % Student-t "
+          r"half-width over training seeds, (\d+) degrees of freedom", nine_seed_gap),
     Check("README.md", r"per seed 0-9 its loss is ([-\d., ]+) and ([-\d.]+) % above", per_seed_gaps),
     Check("README.md", r"`select\.finalists` \((\d+)\)", select_finalists, times=2),
     Check("docs/fidelity.md", r"`select\.finalists` \((\d+)\)", select_finalists),
