@@ -6,6 +6,7 @@ from __future__ import annotations
 from ..dsl.ast import Program
 from ..dsl.printer import describe, rule_text
 from ..dsl.vocabulary import FeatureSet
+from .bandwidth import readme_lines
 from .spec import SEMANTICS_TEXT, used_features
 
 
@@ -127,6 +128,7 @@ def readme(manifest: dict, golden: dict, program: Program | None, vocab: Feature
                 "target reads the agent's own input -> action (M, A). Round 1's x is h.", ""]
     eps = ", ".join(f"{e['episode']} (eval seed {e['eval_seed']}, {e['steps']} steps, {e['agents']} agents"
                     + (f", loss {e['loss']:.6g}" if "loss" in e else "") + ")" for e in golden["episodes"])
+    out += readme_lines(m["bandwidth"]) if m.get("bandwidth") else []  # what the messages cost
     out += ["## Golden vectors", "",
             f"`golden.npz` (numpy arrays, no pickles; `golden.json` says what they are): evaluation episodes {eps}, "
             "recorded by the rollout `neurosym eval` runs: per step the inputs, the uniforms each random rule drew "

@@ -70,7 +70,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
     import numpy as np
     import torch
 
-    from ..export import codegen, golden, spec
+    from ..export import bandwidth, codegen, golden, spec
     from ..export.folder import FORMAT, publish
     from ..export.formats import write_formats
     from ..export.policy import policy_graphs
@@ -139,6 +139,7 @@ def write_export(cfg: RunConfig, folder: Path, claimed: object = None) -> dict:
             "agent_dim": task.obs_dim, "pair_dim": task.pair_dim, "action_dim": task.action_dim,
             "formats": formats, "opset": formats.get("onnx", {}).get("opset"), "tolerance": cfg.export.tolerance,
             "semantics": spec.SEMANTICS if program is not None else None,
+            "bandwidth": bandwidth.of_run(cfg, policy, arrays),  # bits per agent per step: golden and evaluated
             "files": sorted(files + [EXPORT_MANIFEST, "README.md"]),
             "sha256": {f: hashlib.sha256((tmp / f).read_bytes()).hexdigest() for f in sorted(files)},
         }  # sha256: the check refuses an artifact edited after the export, even one no golden decision notices
