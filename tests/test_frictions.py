@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from conftest import neurosym_cmd
+from conftest import neurosym_cmd, run_dir
 
 
 def run(args, runs, cwd=None, env=None, check=True, timeout=300):
@@ -75,10 +75,12 @@ def test_every_printed_hint_runs_as_printed(tmp_path):
     run(["eval", "baseline=hard-attn", *common], tmp_path)
     p = run(["select", *common, "select.lam=[0.5]", "select.rules=[1]", "select.features=[v1]",
              "select.finalists=1", "budget.val_seeds=2", "select.jobs=1"], tmp_path)
-    closing = hints(p)
-    assert [h[0] for h in closing] == ["eval", "pipeline"] and all("selected=true" in h for h in closing)
-    assert "budget=tiny" in closing[0]
-    for h in closing:
+    *guard, evaluate, pipeline = hints(p)  # the guard's line first where the tiny program is silent or no better
+    assert [evaluate[0], pipeline[0]] == ["eval", "pipeline"]
+    assert "selected=true" in evaluate and "selected=true" in pipeline
+    assert "budget=tiny" in evaluate
+    assert all(h[0] == "show-program" and f"runs_root={runs}" in h for h in guard), guard  # it prints the front
+    for h in (*guard, evaluate, pipeline):
         run_hint(h, elsewhere)
     p = run(["stress", "task=random-grid", "budget=tiny", f"runs_root={runs}"], tmp_path, check=False)
     pipeline = hints(p)[-1]  # the closing line's: the warnings before it name each missing model's command
@@ -178,7 +180,9 @@ def test_one_word_per_degree_with_a_legend_under_every_table(tmp_path):
     run(["train", "task=random-grid", "budget=tiny", "threads=1"], tmp_path)
     p = run(["eval", "task=random-grid", "budget=tiny", "baseline=hard-attn", "plots=false"], tmp_path)
     words = " ".join(p.stdout.replace("│", " ").replace("┃", " ").split())
-    assert "max in max out max in+out mean in+out collisions" in words and " ".join(LEGEND.split()) in words
+    # the bandwidth columns after mean in+out (issue 40: degrees.BANDWIDTH)
+    assert "max in max out max in+out mean in+out bits/agent/step link share collisions" in words
+    assert " ".join(LEGEND.split()) in words
     assert "mean deg" not in words and "max deg" not in words and "in-deg " not in words
     p = run(["synth", "task=random-grid", "budget=tiny", "threads=1", "progress=plain"], tmp_path)
     assert "x max in+out" in p.stdout and "degree term" not in p.stdout
@@ -231,11 +235,13 @@ def test_select_names_the_command_that_reuses_a_sweeps_programs_and_that_command
     run(["synth", "-m", "rules=1,2", "lam=0.5", *common], tmp_path)
     synth = tmp_path / "two-groups-cross/tiny/seed0/synth"
     swept = sorted(p.name for p in synth.iterdir() if p.is_dir())
-    assert swept == ["k1-lam0.5-v1", "k2-lam0.5-v1"]
+    tags = [run_dir("synth", tmp_path, *common, f"rules={k}", "lam=0.5").program_tag for k in (1, 2)]  # synth's
+    assert tags[0].startswith("k1-lam0.5-v1") and tags[1].startswith("k2-lam0.5-v1")  # and the default search's
+    assert swept == tags
     cfg = compose_config("select", [f"runs_root={tmp_path}", *common, "select.lam=[0.5]", "select.rules=[1,2]",
                                     "select.features=[v1]"])
     line = searched_otherwise(cfg, grid(cfg))
-    assert line and "2 of the 2 grid programs exist searched with other settings (k1-lam0.5-v1, k2-lam0.5-v1)" in line
+    assert line and f"2 of the 2 grid programs exist searched with other settings ({tags[0]}, {tags[1]})" in line
     (hint,) = hints(subprocess.CompletedProcess([], 0, line, ""))
     assert "synth.coarse=1" in hint and "synth.patience=0" in hint
     p = run([*hint, "budget.val_seeds=2", "select.finalists=1", "select.jobs=1"], tmp_path)

@@ -213,6 +213,11 @@ def test_the_guard_fires_when_communication_helps_and_the_program_is_silent_or_w
     assert "prog-retrained-k2-lam0.5-v1 is silent" in line and "synth.front=true" in line and "smaller lam" in line
     worse = [_row("tf-full", 3.66), _row("prog-retrained-k2-lam0.5-v1", 4.9, degree=3.0), _row("no-comm", 4.55)]
     assert "does no better than no-comm" in communication_guard(worse, labels=LABELS)
+    # the show-program it names runs as printed: the run's own (results.print_table passes run.show_command's)
+    show = "neurosym show-program task=mine rules=2 lam=0.5 features=v1 budget=quick seed=0"
+    for front in (True, False):
+        line = communication_guard(rows, labels=LABELS, show=show, settings={"synth.front": front})
+        assert f"`{show}`" in line and "`neurosym show-program`" not in line
 
 
 def test_the_guard_judges_the_runs_own_program_not_the_first_label_in_sort_order():

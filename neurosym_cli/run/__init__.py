@@ -5,7 +5,7 @@ Only ``layout`` and ``remake`` are imported here: they are stdlib only, so light
 `report`, `show-program`) need no torch; ``checkpoints`` and ``models`` are imported by what needs them.
 """
 
-from .remake import pipeline_command, retrain_command, synth_command, train_command
+from .remake import pipeline_command, retrain_command, show_command, synth_command, train_command
 from .layout import RunDir
 
-__all__ = ["RunDir", "pipeline_command", "retrain_command", "synth_command", "train_command"]
+__all__ = ["RunDir", "pipeline_command", "retrain_command", "show_command", "synth_command", "train_command"]

@@ -26,6 +26,12 @@ def synth_command(cfg: "RunConfig") -> str:
     return cfg.baseline.command("synth", cfg)
 
 
+def show_command(cfg: "RunConfig") -> str:
+    """The command line that prints the program ``cfg``'s baseline's search makes, and its degree-budget front
+    (show-program with the search's task, K, lambda, features, settings, seed and runs root: it runs as printed)."""
+    return "neurosym show-program " + synth_command(cfg).split(" ", 2)[2]
+
+
 def pipeline_command(cfg: "RunConfig") -> str:
     """The command line that makes (or reuses) every artifact of ``cfg``'s run directory and evaluates again."""
     return f"neurosym pipeline {run_args(cfg)}"

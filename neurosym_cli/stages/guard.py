@@ -49,14 +49,15 @@ def _helps(tf: dict, nc: dict, tf_seeds: Mapping[int, float], nc_seeds: Mapping[
     return tf_cost is not None and nc_cost is not None and tf_cost + _half(tf, "cost") < nc_cost - _half(nc, "cost")
 
 
-def communication_guard(rows: list[tuple[str, dict]], *, labels: Sequence[str], rerun: str = "",
+def communication_guard(rows: list[tuple[str, dict]], *, labels: Sequence[str], rerun: str = "", show: str = "",
                         settings: Mapping[str, object] | None = None,
                         per_seed: Mapping[str, Mapping[int, float]] | None = None) -> str | None:
     """rows: (label, summary) per evaluated baseline, as results.collect gives them (summary: metric -> mean, ci95).
     ``labels``: the run's own program labels (prog-retrained's, then prog's; the first evaluated one is judged, never
     another program's that the directory also holds); ``per_seed``: label -> {evaluation seed: loss} (tf-full's and
     no-comm's, for the paired rule); ``settings``: the run's synth.front, synth.search and synth.objective, so that
-    no lever already in effect is suggested; ``rerun``: the synth command to extend.
+    no lever already in effect is suggested; ``rerun``: the synth command to extend; ``show``: the show-program
+    command that prints the run's front (both run as printed: the run's task, budget, seed and runs root).
 
     One line when communication helps (communication_helps) and the program is silent or its loss is no lower than
     no-comm's; else None."""
@@ -76,12 +77,12 @@ def communication_guard(rows: list[tuple[str, dict]], *, labels: Sequence[str], 
     if not silent and cost < nc_cost:
         return None
     what = "is silent (max in+out 0)" if silent else f"does no better than no-comm ({cost:.3g})"
-    base = rerun or "neurosym synth"
+    base, shown = rerun or "neurosym synth", show or "neurosym show-program"
     given = "-file-" in label  # a program= file (pipeline.select=front's pick): no lam chose it
     if str(settings.get("synth.front", "")).lower() == "true":
-        tries = ["a higher budget of its front (`neurosym show-program` prints it) as program="]
+        tries = [f"a higher budget of its front (`{shown}` prints it) as program="]
     else:
-        tries = [f"`{base} synth.front=true` and a budget of its front from `neurosym show-program`"]
+        tries = [f"`{base} synth.front=true` and a budget of its front from `{shown}`"]
     tries += [] if given else ["a smaller lam"]
     tries += [words for key, value, words in LEVERS if str(settings.get(key, "")) != value]
     why = "" if given else ": lam prices the degree above what it buys here"

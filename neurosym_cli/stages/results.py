@@ -3,6 +3,7 @@ a (task, budget), in the paper's order (``schemes.SCHEMES``), as tables and Figu
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Iterable
@@ -11,7 +12,7 @@ from .. import schemes
 from ..config import RunConfig
 from ..baselines import run_args
 from ..degrees import BANDWIDTH, BANDWIDTH_LEGEND, LEGEND, NAMES
-from ..run import RunDir, pipeline_command
+from ..run import RunDir, pipeline_command, show_command
 from ..run.layout import (FIGURES, IMPROVEMENT_CSV, PARETO_CSV, PARETO_PNG, REPORT_CSV, REPORT_CURVES, REPORT_JSON,
                           REPORT_MARL_EVAL, REPORT_PNG, SEED_PREFIX, RunsRoot, history_files, metrics_files)
 from ..seeds.read import SHARED as METRICS  # every evaluation's metrics, named without torch
@@ -160,8 +161,6 @@ def _guard_inputs(cfg: RunConfig, program: str) -> tuple[list[str], dict[str, di
     """The guard's inputs from this run directory: the labels of the run's own program baselines (under
     ``program``, "" for the searched one; prog-retrained's first) and tf-full's and no-comm's loss per evaluation
     seed (their metrics.json's per-seed rows, for the paired rule)."""
-    import dataclasses
-
     from ..config import UserError
 
     labels = []
@@ -189,9 +188,10 @@ def print_table(cfg: RunConfig, *, program: str | None = None) -> None:
                                 caption=CAPTION))
     labels, per_seed = _guard_inputs(cfg, cfg.program if program is None else program)
     line = communication_guard(rows, labels=labels, rerun=f"neurosym synth baseline=prog {run_args(cfg)}",
-                               per_seed=per_seed, settings={"synth.front": cfg.synth.front,
-                                                            "synth.search": cfg.synth.search,
-                                                            "synth.objective": cfg.synth.objective})
+                               show=show_command(dataclasses.replace(cfg, baseline=schemes.get("prog"))),
+                               per_seed=per_seed,
+                               settings={"synth.front": cfg.synth.front, "synth.search": cfg.synth.search,
+                                         "synth.objective": cfg.synth.objective})
     if line:
         log.warning(line)
     if cfg.plots:

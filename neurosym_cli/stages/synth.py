@@ -13,7 +13,7 @@ from ..degrees import objective_form
 from ..dsl.ast import Program
 from ..dsl.printer import to_text
 from ..dsl.sampling import MOVE_HELP
-from ..run import RunDir, synth_command, train_command
+from ..run import RunDir, show_command, synth_command, train_command
 from ..run.checkpoints import open_checkpoint, policy_from_payload
 from ..run.summary import is_program_summary
 from ..run.layout import PROGRAM, TREE
@@ -179,7 +179,7 @@ def search_program(cfg: RunConfig, info: RunInfo, policy, env, data: list[DataBu
     say(f"[green]synthesized[/] {rd.program_file}")
     if fronts:
         write_front(rd.front_file, cfg, tag, fronts)
-        say(f"[green]degree-budget front[/] {rd.front_file} (`neurosym show-program` prints it)")
+        say(f"[green]degree-budget front[/] {rd.front_file} (`{show_command(cfg)}` prints it)")
     if not info.multirun:
         render(program, env.features(cfg.features).vocab, rounds, cfg.lam, objective=cfg.synth.objective)
     return {"program": str(rd.program_file), "objective": sum(x["objective"] for x in rounds),
