@@ -16,6 +16,12 @@ The verdict of issue 37, per training seed and across seeds 0-2 (``verdicts``): 
 tf-full, paired 95 % t interval over the evaluation seeds, above 0); prog-retrained significantly better than no-comm
 (no-comm - prog-retrained above 0); the share of the no-comm -> tf-full gap it closes (at least a half); its max
 in+out against tf-full's (at most a third).
+
+``--suite paper`` runs the paper's three tasks the same way, at the paper budget with every baseline: the user's
+one command ``neurosym pipeline task=T budget=paper seed=S`` under today's defaults, so that docs/results.md can
+set the paper's claims under the defaults beside those of the paper's method (docs/results/seeds/, run by
+benchmarks/run_seeds.py); result files ``docs/results/seeds-defaults/<task>-seed<S>.json`` in the seed-file format
+(neurosym_cli/seeds/read.py reads both).
 """
 
 from __future__ import annotations
@@ -62,6 +68,23 @@ TASKS = {t.name: t for t in (
          "the swarm, two fronts of 100 crossing (N = 200), trained at that N (conf/budget/swarm.yaml)"),
 )}
 """the tasks beyond the paper, by the name of their result files"""
+PAPER_TASKS = {t: Task(t, (f"task={t}", "budget=paper"), f"the paper's {t} (section 4), paper budget")
+               for t in ("unlabeled-goals", "random-grid", "random-cross")}
+"""the paper's tasks under today's defaults (--suite paper), cheapest first"""
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A set of tasks the protocol runs: where their result files go and which baselines each pipeline makes."""
+
+    tasks: dict[str, Task]
+    out: Path
+    baselines: tuple[str, ...] | None  # None: the pipeline's own list (every baseline)
+    seed_format: bool = False  # also the seed-file format's fields (budget, pick: the run's K, lambda, features)
+
+
+SUITES = {"beyond": Suite(TASKS, OUT, BASELINES),
+          "paper": Suite(PAPER_TASKS, ROOT / "docs" / "results" / "seeds-defaults", None, True)}
 
 
 def result_file(out: Path, task: str, seed: int) -> Path:
@@ -72,41 +95,49 @@ def stash_dir(out: Path, task: str, seed: int) -> Path:
     return out / "partial" / f"{task}-seed{seed}"
 
 
-def run_args(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = ()) -> list[str]:
+def run_args(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = (),
+             baselines: tuple[str, ...] | None = BASELINES) -> list[str]:
     return [*task.args, *extra, f"seed={seed}", "threads=1", "plots=false", "progress=plain", f"runs_root={runs}",
-            f"baselines=[{','.join(BASELINES)}]"]
+            *([f"baselines=[{','.join(baselines)}]"] if baselines else [])]
 
 
 def exp_dir(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = ()) -> Path:
     """The run directory of one task-seed (the config's own, as the pipeline names it)."""
     from neurosym_cli import api
 
-    args = run_args(task, seed, runs, extra)
+    args = run_args(task, seed, runs, extra, None)
     config_dir = args[args.index("--config-dir") + 1] if "--config-dir" in args else None
     items = [a for a in args if not a.startswith("--config-dir") and a != config_dir]
     return Path(api.compose("pipeline", items, config_dir=ROOT / config_dir if config_dir else None).exp_dir)
 
 
-def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, ...] = ()) -> dict:
+def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, ...] = (),
+            suite: Suite = SUITES["beyond"]) -> dict:
     """The small result file of one task-seed: each baseline's evaluation (the label the pipeline ran it under)."""
+    from neurosym_cli import api
     from neurosym_cli.run.layout import RunFolder
 
     run = RunFolder(exp)
     baselines = {}
     for f in run.metrics_files():
         m = json.loads(f.read_text())
-        if m["baseline"] in BASELINES:
+        if suite.baselines is None or m["baseline"] in suite.baselines:
             baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
                                         "seconds": m["seconds"]}
     programs = {p.parent.name: p.read_text().strip() for p in run.programs()}
     front = sorted(exp.glob("select/front/*.json"))
     timings = run.timings_file
-    return {"task": task.name, "about": task.about, "seed": seed, "command": "neurosym pipeline " + " ".join(
-                a for a in run_args(task, seed, Path("R"), extra) if not a.startswith("runs_root")),
-            "baselines": baselines, "programs": programs,
-            "front_pick": json.loads(front[-1].read_text()) if front else None,
-            "timings": json.loads(timings.read_text()) if timings.exists() else {},
-            "wall_s": round(wall_s, 1), "machine": {**machine(exp), "cores": os.cpu_count()}}
+    args = run_args(task, seed, Path("R"), extra, suite.baselines)
+    res = {"task": task.name, "about": task.about, "seed": seed, "command": "neurosym pipeline " + " ".join(
+               a for a in args if not a.startswith("runs_root")),
+           "baselines": baselines, "programs": programs,
+           "front_pick": json.loads(front[-1].read_text()) if front else None,
+           "timings": json.loads(timings.read_text()) if timings.exists() else {},
+           "wall_s": round(wall_s, 1), "machine": {**machine(exp), "cores": os.cpu_count()}}
+    if suite.seed_format:  # the seed-file format: the budget and the run's K, lambda and features
+        cfg = api.compose("pipeline", [a for a in run_args(task, seed, Path("R"), extra, None)])
+        res.update(budget=cfg.budget.name, pick={"rules": cfg.rules, "lam": cfg.lam, "features": cfg.features})
+    return res
 
 
 def paired(res: dict, a: str, b: str) -> tuple[float, float]:
@@ -147,17 +178,24 @@ def verdicts(out: Path) -> dict[str, dict]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=list(TASKS))
+    ap.add_argument("--suite", default="beyond", choices=list(SUITES), help="beyond: the tasks beyond the paper; "
+                    "paper: the paper's tasks under today's defaults")
+    ap.add_argument("--tasks", nargs="+", help="some of the suite's tasks (default: all)")
     ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS))
     ap.add_argument("--runs", default=str(ROOT / "outputs" / "beyond"), help="runs root")
-    ap.add_argument("--out", default=str(OUT), help="where result files go")
+    ap.add_argument("--out", help="where result files go (default: the suite's)")
     ap.add_argument("--commit", action="store_true", help="git-commit each result file and stash as written")
     ap.add_argument("--stash-every", type=float, default=600.0, help="seconds between stashes (0 = never)")
     ap.add_argument("--extra", nargs="*", default=[], help="more overrides (a tiny rehearsal: budget=tiny)")
     ap.add_argument("--verdicts", action="store_true", help="print the verdicts of the result files and stop")
     a = ap.parse_args()
-    out, runs = Path(a.out), Path(a.runs)
-    if a.verdicts:
+    suite = SUITES[a.suite]
+    names = a.tasks or list(suite.tasks)
+    if unknown := [n for n in names if n not in suite.tasks]:
+        ap.error(f"no task {unknown[0]!r} in the {a.suite} suite; pick from {', '.join(suite.tasks)}")
+    out, runs = Path(a.out or suite.out), Path(a.runs)
+    where = f"docs/results/{out.name}"
+    if a.verdicts and a.suite == "beyond":
         for name, v in verdicts(out).items():
             print(f"{name}: {TASKS[name].about}")
             for seed, r in v["seeds"].items():
@@ -167,8 +205,8 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **PIN}
     for seed in a.seeds:
-        for name in a.tasks:
-            task, dest = TASKS[name], result_file(out, name, seed)
+        for name in names:
+            task, dest = suite.tasks[name], result_file(out, name, seed)
             if dest.exists():
                 print(f"{name} seed {seed}: done ({dest})", flush=True)
                 continue
@@ -183,33 +221,33 @@ def main() -> None:
             def keep() -> None:
                 while not stop.wait(a.stash_every):
                     if stash(exp, part) and a.commit:
-                        git_commit(part, f"docs/results/beyond: stash of unfinished {name} seed {seed} (issue 37)")
+                        git_commit(part, f"{where}: stash of unfinished {name} seed {seed} (issue 37)")
 
             if a.stash_every > 0:
                 threading.Thread(target=keep, daemon=True).start()
             logs = runs / "logs"
             logs.mkdir(parents=True, exist_ok=True)
             t0 = time.time()
-            cmd = [neurosym(), "pipeline", *run_args(task, seed, runs, extra)]
+            cmd = [neurosym(), "pipeline", *run_args(task, seed, runs, extra, suite.baselines)]
             print(f"{time.strftime('%H:%M:%S')} {name} seed {seed}: {' '.join(cmd)}", flush=True)
             with open(logs / f"{name}-seed{seed}.log", "a") as log:
                 rc = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
             stop.set()
             if rc != 0:
                 if stash(exp, part) and a.commit:
-                    git_commit(part, f"docs/results/beyond: stash of unfinished {name} seed {seed} (issue 37)")
+                    git_commit(part, f"{where}: stash of unfinished {name} seed {seed} (issue 37)")
                 print(f"{name} seed {seed}: exit {rc}; see {logs / f'{name}-seed{seed}.log'}", flush=True)
                 continue
-            res = collect(exp, task, seed, time.time() - t0, extra)
+            res = collect(exp, task, seed, time.time() - t0, extra, suite)
             write_result(dest, res)
-            v = verdict(res)
-            print(f"{time.strftime('%H:%M:%S')} {name} seed {seed}: " + ", ".join(
-                f"{k} {'yes' if ok else 'NO'}" for k, ok in v["holds"].items()) + f" -> {dest}", flush=True)
+            said = ", ".join(f"{k} {'yes' if ok else 'NO'}" for k, ok in verdict(res)["holds"].items()) \
+                if suite.baselines else f"{len(res['baselines'])} baselines"
+            print(f"{time.strftime('%H:%M:%S')} {name} seed {seed}: {said} -> {dest}", flush=True)
             if a.commit:
-                git_commit(dest, f"docs/results/beyond: {name} training seed {seed} (issue 37)")
+                git_commit(dest, f"{where}: {name} training seed {seed} (issue 37)")
                 if part.exists():
                     subprocess.run(["git", "rm", "-r", "-q", "--", str(part)], cwd=ROOT, check=False)
-                    git_commit(part, f"docs/results/beyond: {name} seed {seed} done; its stash removed")
+                    git_commit(part, f"{where}: {name} seed {seed} done; its stash removed")
 
 
 if __name__ == "__main__":
