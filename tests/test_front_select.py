@@ -122,6 +122,12 @@ def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_pa
     assert choice["margin"] == 0.02  # the equivalence test's margin, recorded
     if choice["communication_helps"]:
         assert picked["degree"] > 0
+    # later verbs without program= follow the pick (stages/front_select.apply_front_pick), not the single-lam program
+    p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=prog-retrained"], tmp_path)
+    assert "the pipeline's pick among the front" in p.stdout and picked["label"] in p.stdout
+    p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=prog-retrained",
+             "pipeline.select=none"], tmp_path, check=False)  # the single-lam program: never retrained here
+    assert p.returncode != 0 and "neurosym retrain" in p.stderr and "Traceback" not in p.stderr
 
 
 def test_select_lam_grid_follows_the_task_objective(tmp_path):

@@ -100,3 +100,21 @@ def test_the_collectors_keep_the_hybrid_program_and_not_another_search(tmp_path,
     results_collect.collect(tmp_path, "paper", 0)
     out = json.loads((tmp_path / "results/random-cross.json").read_text())
     assert sorted(out["programs"]) == ["det-k1-lam0.5-v1-hybrid", "k1-lam0.5-v1-hybrid"]
+
+
+def test_a_printed_command_composes_the_search_it_names():
+    """Searched._line (the `create it with ...` hints) adds every search setting that differs from what a command
+    line composes: synth.search=mcmc names no tag suffix, yet hybrid is the composed default."""
+    import shlex
+
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.schemes import get
+
+    for task, extra in (("two-groups-cross", ["synth.search=mcmc"]), ("two-groups-cross", ["synth.objective=paper"]),
+                        ("random-grid", ["synth.objective=scaled", "synth.search=mcmc", "synth.coarse=4"]),
+                        ("random-grid", [])):
+        cfg = compose_config("synth", [f"task={task}", "budget=tiny", "lam=0.5", *extra])
+        line = get("prog-retrained").command("retrain", cfg)
+        again = compose_config("retrain", shlex.split(line)[2:])
+        assert {k: getattr(again.synth, k) for k in SEARCH_KEYS} == {k: getattr(cfg.synth, k) for k in SEARCH_KEYS}
+        assert search_tag(again) == search_tag(cfg), line

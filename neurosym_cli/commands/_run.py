@@ -195,6 +195,9 @@ def run_command(name: str, cfg: DictConfig, fn: Callable[[RunConfig, RunInfo], A
             from ..stages.select import apply_selected
 
             typed = apply_selected(typed)
+        from ..stages.front_select import apply_front_pick
+
+        typed = apply_front_pick(typed, name.replace("_", "-"))  # eval, render, ...: what the pipeline picked
         if typed.threads:
             from ..utils.cpu import set_threads
 

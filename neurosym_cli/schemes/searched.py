@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import re
 import shlex
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping
@@ -96,6 +97,22 @@ def search_variants(cfg: "RunConfig") -> list[tuple[str, str]]:
     return variants_of({v.key: getattr(cfg.synth, v.key) for v in SEARCH_VARIANTS})
 
 
+def search_overrides(cfg: "RunConfig") -> str:
+    """The command-line overrides that search ``cfg``'s program again: each setting that names the program, and each
+    that differs from what a command line composes without it (synth.search=mcmc names nothing, mcmc being the
+    tag's old default, yet hybrid is composed now; synth.objective's default is the task's own)."""
+    from ..config import SynthConfig
+
+    composed = {f.name: f.default for f in dataclasses.fields(SynthConfig)}
+    composed["objective"] = cfg.task.objective
+    out = []
+    for v in SEARCH_VARIANTS:
+        value = getattr(cfg.synth, v.key)
+        if v.names(value) or value != composed[v.key]:
+            out.append(" " + override(v.key, value))
+    return "".join(out)
+
+
 def point_tag(*, rules: int, lam: float, features: str) -> str:
     """The grid point's part of a program's tag (K, lambda, feature map): 'k2-lam0.5-v1'."""
     return f"k{rules}-lam{lam:g}-{features}"
@@ -141,9 +158,9 @@ class Searched(OnOracle):
         """What its artifact tags start with (the report tells retrainings apart by it)."""
         return ""
 
-    def variants(self, cfg: "RunConfig") -> list[tuple[str, str]]:
-        """(name suffix, override) of the search settings that name its artifact."""
-        return []
+    def overrides(self, cfg: "RunConfig") -> str:
+        """The search settings that make its artifact again, as command-line overrides."""
+        return ""
 
     def upstream(self) -> list[Stage]:
         return [Stage("train", ORACLE), Stage("synth", self.search())]
@@ -153,7 +170,7 @@ class Searched(OnOracle):
 
     def _line(self, verb: str, cfg: "RunConfig", baseline: str, extra: str = "") -> str:
         named = "" if VERB_DEFAULTS.get(verb) == baseline else f" baseline={baseline}"
-        obj = "".join(override for _, override in self.variants(cfg))
+        obj = self.overrides(cfg)
         return (f"neurosym {verb} task={cfg.task.name} rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}"
                 f" budget={cfg.budget.name} seed={cfg.seed}{runs_root_arg(cfg)}{named}{obj}{extra}")
 
@@ -185,8 +202,8 @@ class Program(Searched):
     def tag_prefix(self) -> str:
         return "det-" if self.det else ""
 
-    def variants(self, cfg: "RunConfig") -> list[tuple[str, str]]:
-        return search_variants(cfg)
+    def overrides(self, cfg: "RunConfig") -> str:
+        return search_overrides(cfg)
 
     def artifact(self, cfg: "RunConfig") -> Artifact:
         return Artifact(("det-" if self.det and not cfg.program else "") + search_tag(cfg), PROGRAM)

@@ -36,7 +36,7 @@ from ..run import RunDir
 from ..schemes import get
 from ..stats import mean_ci
 from ..utils.console import clock, log, say
-from ..utils.io import write_json
+from ..utils.io import read_json, write_json
 from .front import read_front
 from .guard import SILENT, communication_helps
 from .validation import choose, validate
@@ -107,6 +107,37 @@ def write_candidate(path: Path, cand: dict, tag: str) -> None:
         return
     path.parent.mkdir(parents=True, exist_ok=True)
     save_program(path, cand["program"], header)
+
+
+# --------------------------------------------------------------------------------------------- after the stage
+FOLLOW_PICK = ("eval", "render", "stress", "export", "figures")
+"""the verbs that, given no program=, run prog and prog-retrained under the pipeline's front pick when there is one:
+what the pipeline evaluated is what they show"""
+
+
+def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
+    """``cfg`` with program= the pipeline's pick among its search's front (select/front/<tag>.json), when ``verb``
+    follows the pick, no program= is given, pipeline.select is front and the pipeline chose; else ``cfg``."""
+    if verb not in FOLLOW_PICK or cfg.program or cfg.pipeline.select != "front":
+        return cfg
+    rd = RunDir(dataclasses.replace(cfg, baseline=get(SEARCH), program=""))
+    tag = rd.program_tag
+    choice = rd.front_choice_file(tag)
+    if not choice.exists():
+        return cfg  # no pipeline ran this search's selection: the single-lam program, as before
+    rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"picked": dict})
+    try:
+        path = rd.front_candidate_file(tag, float(rec["picked"]["budget"]))  # here, wherever the runs root moved
+    except (KeyError, TypeError, ValueError):
+        raise UserError(f"corrupt front choice {choice}; delete it and run `neurosym pipeline {run_args(cfg)}`") \
+            from None
+    if not path.exists():
+        raise UserError(f"the front choice {choice} names {path}, which is gone; run `neurosym pipeline "
+                        f"{run_args(cfg)}` to write it again")
+    if verb == "figures" or cfg.baseline.name in (SEARCH, RETRAINED):
+        say(f"{cfg.baseline.name if verb != 'figures' else 'programs'}: the pipeline's pick among the front (budget "
+            f"{rec['picked']['budget']:g}, {path.name}); program=<file> for another")
+    return dataclasses.replace(cfg, program=str(path))
 
 
 # --------------------------------------------------------------------------------------------- the stage

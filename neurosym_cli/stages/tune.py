@@ -34,7 +34,7 @@ from ..run import RunDir
 from ..run.layout import fail_suffix
 from ..schemes import get
 from ..schemes.families import rate_suffix
-from ..schemes.searched import SEARCH_KEYS, search_variants
+from ..schemes.searched import SEARCH_KEYS, search_overrides
 from ..stats import mean_ci
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
@@ -322,7 +322,7 @@ def eval_line(cfg: RunConfig, row: dict[str, Any]) -> str:
                                 optim=dataclasses.replace(cfg.optim, retrain_lr=row["retrain_lr"]))
     rate = f" optim.retrain_lr={row['retrain_lr']:g}" if rate_suffix(point) else ""
     return (f"neurosym eval {run_args(cfg)} baseline=prog-retrained rules={row['rules']} lam={row['lam']:g} "
-            f"features={row['features']}" + "".join(o for _, o in search_variants(point)) + rate)
+            f"features={row['features']}" + search_overrides(point) + rate)
 
 
 def write_study(optuna, study, cfg: RunConfig, name: str, url: str, ran: int, seconds: float) -> dict[str, Any]:
