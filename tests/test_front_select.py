@@ -165,3 +165,15 @@ def test_a_front_pick_is_the_method_outcome_per_seed_in_reports():
 
     assert is_front_pick("outputs/two-groups-cross/quick/seed1/select/front/k5-lam0.5-v1-b3.txt")
     assert not is_front_pick("") and not is_front_pick("my/front/program.txt") and not is_front_pick("prog.txt")
+
+
+def test_pipeline_with_a_program_file_runs_it_and_neither_searches_nor_chooses(tmp_path):
+    """program= on the pipeline: prog-retrained is retrained and evaluated under the user's file; neither prog's
+    search nor the front's choice runs (before, the file was ignored and the front chosen among)."""
+    (tmp_path / "nn.txt").write_text("argmax(map(-1.0*d, filter(true, l)))\n")
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", f"program={tmp_path / 'nn.txt'}",
+             "baselines=[prog-retrained]"], tmp_path)
+    exp = tmp_path / "two-groups-cross/tiny/seed0"
+    assert "run under program=" in p.stdout and not (exp / "synth").exists() and not (exp / "select").exists()
+    evaluated = [d.name for d in (exp / "eval").iterdir() if d.name.startswith("prog-retrained")]
+    assert len(evaluated) == 1 and evaluated[0].startswith("prog-retrained-file-nn-"), evaluated

@@ -126,6 +126,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         cfg = apply_selected(cfg)
         say(f"pipeline with the selected configuration: rules={cfg.rules} lam={cfg.lam:g} features={cfg.features}")
     stages = plan(cfg.baselines)
+    if cfg.program:  # a hand-written program: prog and prog-retrained run under it, nothing is searched for them
+        stages = [s for s in stages if s != Stage("synth", "prog")]
     results = {}
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = RunDir(cfg).timings_file
@@ -152,8 +154,10 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         write_json(timing_file, timings)
         return result
 
-    chosen = ""
-    if cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines):
+    chosen = cfg.program  # program=: the user's choice, the front is not chosen among
+    if chosen:
+        say(f"pipeline: prog and prog-retrained run under program={chosen}")
+    elif cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines):
         from .front_select import select_front
 
         chosen = str(select_front(cfg, run))
