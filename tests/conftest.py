@@ -50,14 +50,14 @@ def run_dir(cmd: str, runs, *overrides: str, config_dir=None):
 
 def front_pick(runs, *overrides: str) -> dict:
     """The pipeline's front selection of the run of ``overrides`` (pipeline.select=front, the default): the
-    ``picked`` row of select/front/<tag>.json (budget, program_file, label, program, degree, loss_mean)."""
+    ``picked`` row of select/front/<tag>.json (name, budget, program_file, label, program, degree, loss_mean)."""
     search = run_dir("synth", runs, *overrides)
     return json.loads(search.front_choice_file(search.program_tag).read_text())["picked"]
 
 
 def picked_labels(runs, *overrides: str) -> dict[str, str]:
     """prog and prog-retrained -> the label the pipeline evaluates them under: the front's pick run as program=
-    (prog-file-<tag>-b<budget>-<sha1:8>-<features>)."""
+    (prog-file-<tag>-<name>-<sha1:8>-<features>, name b<budget> or near<budget>)."""
     program = front_pick(runs, *overrides)["program_file"]
     return {b: run_dir("eval", runs, *overrides, f"baseline={b}", f"program={program}").label
             for b in ("prog", "prog-retrained")}

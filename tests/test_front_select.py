@@ -114,7 +114,8 @@ def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_pa
     picked = choice["picked"]
     assert choice["val_seeds"] == 3 and len(choice["tf_full"]["loss"]) == 3
     assert sum(r["picked"] for r in choice["candidates"]) == 1
-    assert picked["label"].startswith("prog-retrained-file-k2-lam0.5-v1-hybrid-b")
+    assert picked["label"].startswith(f"prog-retrained-file-k2-lam0.5-v1-hybrid-{picked['name']}-")
+    assert {r["name"] for r in choice["candidates"]} >= {"b2"}  # the front's budgets, and near<b> where distinct
     assert (exp / "train" / picked["label"].replace("prog-retrained-", "retrained-", 1) / "model.pt").exists()
     labels = [label for label, _ in collect(exp)]
     assert picked["label"] in labels and "no-comm" in labels  # the test evaluation is of the pick

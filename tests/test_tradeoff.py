@@ -171,8 +171,8 @@ def test_the_front_is_monotone_and_within_its_budgets():
     k = 2
     sc = _scorer(env, pol, data, objective="paper", lam=0.3, cap=k)
     budgets = [0.0, 1.0, 2.0, 3.0, 4.0, 6.0]
-    rows = search_front(sc, _spec(k, det=False), archive=_archive(sc, k, 60), budgets=budgets, steps=25,
-                        seed="front", gen=torch.Generator().manual_seed(1))
+    rows, _ = search_front(sc, _spec(k, det=False), archive=_archive(sc, k, 60), budgets=budgets, steps=25,
+                           seed="front", gen=torch.Generator().manual_seed(1))
     assert [r["budget"] for r in rows] == budgets
     assert rows[0]["degree"] == 0 and rows[0]["l1_ratio"] == pytest.approx(1.0) and rows[0]["source"] == "silence"
     for a, b in zip(rows, rows[1:]):
@@ -188,12 +188,38 @@ def test_a_planted_program_is_recovered_at_its_budget():
     planted = sc.score((NEAREST,))
     assert planted.l1 < 1e-5 and planted.degree > 0
     at = math.ceil(planted.degree)
-    rows = search_front(sc, _spec(1), archive=_archive(sc, 1, 300), budgets=[0.0, float(at), float(at + 2)],
-                        steps=40, seed="planted", gen=torch.Generator().manual_seed(1))
+    rows, _ = search_front(sc, _spec(1), archive=_archive(sc, 1, 300), budgets=[0.0, float(at), float(at + 2)],
+                           steps=40, seed="planted", gen=torch.Generator().manual_seed(1))
     assert rows[0]["l1"] > 1e-2  # silence does not act as the nearest agent's listener
     for r in rows[1:]:
         assert r["l1"] < 1e-3, r
         assert r["degree"] <= planted.degree + 1e-6  # the planted program, or one that picks as it does
+
+
+def test_the_sparse_end_offers_the_nearest_agent_within_the_largest_radius_in_budget():
+    """synth/front.range_rows: per budget 1, 2, 3 the nearest-within-r program of the largest quantile radius whose
+    max in+out on D is within it; radius and degree grow with the budget; the text parses back to that program;
+    a radius past every distance is the planted nearest-agent program (L1 0 on its own targets)."""
+    from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.synth.front import nearest_within, range_rows
+
+    env, pol, data = _planted()
+    sc = _scorer(env, pol, data, objective="paper", lam=0.0, cap=1)
+    unit = sc.silent_l1()
+    radii = (0.5, 1.0, 2.0, 4.0, 8.0, 1e6)
+    rows = range_rows(sc, radii, [0.0, 1.0, 2.0, 3.0, 6.0], unit)
+    assert rows and [r["budget"] for r in rows] == sorted(r["budget"] for r in rows)
+    for r in rows:
+        assert r["degree"] <= r["budget"] + 1e-9 and r["source"] == "range"
+        assert parse(r["program"]).rounds[0] == nearest_within(r["radius"])
+        bigger = [x for x in radii if x > r["radius"]]
+        if bigger:  # the next radius would exceed the budget
+            assert sc.score(nearest_within(bigger[0])).degree > r["budget"] + 1e-9
+    for a, b in zip(rows, rows[1:]):
+        assert b["radius"] >= a["radius"] and b["degree"] >= a["degree"]
+    top = sc.score(nearest_within(1e6))
+    assert top.l1 < 1e-5  # within every distance: the nearest agent, the planted program
+    assert range_rows(sc, radii, [0.0], unit) == []  # no budget of the sparse end asked for
 
 
 # ------------------------------------------------------------------------------------------ the guard

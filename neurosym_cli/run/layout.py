@@ -11,7 +11,7 @@ composes them into paths, the schemes never do.
     <exp_dir>/tensorboard/<run>/          event files (logger=tensorboard)
     <exp_dir>/pipeline_timings.json       each stage's wall time (`neurosym pipeline`)
     <exp_dir>/select/                     selected.json, selection.json/.csv, val/<label>.json (`neurosym select`)
-    <exp_dir>/select/front/               <tag>.json, <tag>-b<budget>.txt (pipeline.select=front)
+    <exp_dir>/select/front/               <tag>.json, <tag>-b<budget>.txt, <tag>-near<budget>.txt (pipeline.select=front)
     <exp_dir>/select/tune/                optuna.db, <study>/selection.json/.csv, pareto.csv/.png (`neurosym tune`)
     <exp_dir>/rl/                         picks.json, grid.json/.csv (`neurosym rl`)
     <exp_dir>/stress/                     stress.json/.csv/.png (`neurosym stress`)
@@ -207,10 +207,11 @@ class _Folder:
         validation rows beside it."""
         return self.select_dir / FRONT_SELECT / f"{tag}.json"
 
-    def front_candidate_file(self, tag: str, budget: float) -> Path:
-        """select/front/<tag>-b<budget>.txt: the program of one budget of search <tag>'s front, run as program=
-        (its evaluation label and retrained model are named by its content, schemes/searched.user_program_tag)."""
-        return self.select_dir / FRONT_SELECT / f"{tag}-b{budget:g}.txt"
+    def front_candidate_file(self, tag: str, name: str) -> Path:
+        """select/front/<tag>-<name>.txt: one candidate of search <tag>'s front (name b<budget>, or near<budget> for
+        the sparse end's nearest-within-r program), run as program= (its evaluation label and retrained model are
+        named by its content, schemes/searched.user_program_tag)."""
+        return self.select_dir / FRONT_SELECT / f"{tag}-{name}.txt"
 
     @property
     def tune_db(self) -> Path:
@@ -450,7 +451,7 @@ class RunDir(_Folder):
 
 
 def is_front_pick(program: str | Path) -> bool:
-    """Whether a program path is one of a front's candidate files (select/front/<tag>-b<budget>.txt): a run's
+    """Whether a program path is one of a front's candidate files (select/front/<tag>-<name>.txt): a run's
     pipeline.select=front pick, which differs per training seed as select's pick does."""
     p = Path(program)
     return bool(str(program)) and p.parent.name == FRONT_SELECT and p.parent.parent.name == SELECT

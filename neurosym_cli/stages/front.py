@@ -20,7 +20,8 @@ FRONT_STREAM = 400
 
 def round_front(cfg: RunConfig, spec: RoundSpec, scorer: CachedScorer, archive: list[tuple], *, round_idx: int,
                 tag: str, make_scorer) -> dict:
-    """One round's front: {round, l1_silent, steps, budgets: [rows of synth.front.search_front]}. ``make_scorer``
+    """One round's front: {round, l1_silent, steps, budgets: [rows of synth.front.search_front], range: [its
+    nearest-within-r rows]}. ``make_scorer``
     (objective -> CachedScorer on the same D and random numbers) builds a max in+out scorer when the search's own
     counts the hinge."""
     from ..synth.front import default_budgets, search_front
@@ -30,10 +31,11 @@ def round_front(cfg: RunConfig, spec: RoundSpec, scorer: CachedScorer, archive: 
     n_max = max(d.n for d in scorer.data)
     budgets = sorted(set(cfg.synth.front_budgets)) or default_budgets(cfg.rules, n_max)
     steps = cfg.synth.front_steps or max(1, spec.steps // max(1, len(budgets) - 1))
-    rows = search_front(front_scorer, spec, archive=archive, budgets=budgets, steps=steps,
+    rows, near = search_front(front_scorer, spec, archive=archive, budgets=budgets, steps=steps,
                         seed=f"{cfg.seed}/{round_idx}/{tag}/front",
                         gen=generator(cfg.seed, STREAM_SYNTH, FRONT_STREAM + round_idx))
-    return {"round": round_idx + 1, "l1_silent": front_scorer.silent_l1(), "steps_per_budget": steps, "budgets": rows}
+    return {"round": round_idx + 1, "l1_silent": front_scorer.silent_l1(), "steps_per_budget": steps, "budgets": rows,
+            "range": near}
 
 
 def write_front(path: Path, cfg: RunConfig, tag: str, rounds: list[dict]) -> None:

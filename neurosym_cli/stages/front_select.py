@@ -4,15 +4,17 @@ front's budgets instead of a lambda grid; issue 37).
 
     1. the oracle, its search with the front (synth.front=true: one program per budget of max in+out on D) and
        no-comm's own model;
-    2. every distinct program of the front (the lowest budget that reaches it) is written to
-       select/front/<tag>-b<budget>.txt and run as program= (its label and retrained model are named by its
+    2. every distinct program of the front (the lowest budget that reaches it), and at the sparse end the
+       nearest-within-r programs (synth/front.range_rows), is written to select/front/<tag>-<name>.txt (name
+       b<budget>, near<budget>) and run as program= (its label and retrained model are named by its
        content); the oracle is retrained under it (budget.retrain_rollouts, the retraining prog-retrained gets
        anyway, so the pick's is reused) and validated: loss per validation seed (``budget.val_seeds``, episodes of
        their own stream, never a test episode; select.validate) and max in+out;
     3. tf-full and no-comm validated the same way: communication helps when the paired 95 % Student-t interval of
        no-comm - tf-full over the validation seeds lies above 0; then silent programs are no candidates;
     4. the pick by select.choose: among the candidates whose paired 95 % interval of the loss difference to the
-       validation-best contains 0, the lowest validation max in+out (the lower mean loss on a tie);
+       validation-best ends below pipeline.margin x the best's mean loss (an equivalence test), the lowest
+       validation max in+out (the lower mean loss on a tie);
     5. the choice and every candidate's rows in select/front/<tag>.json; the pipeline then makes and evaluates prog
        and prog-retrained under the picked program, on the test seeds.
 """
@@ -77,29 +79,41 @@ def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = 
 
 # --------------------------------------------------------------------------------------------- candidates
 def candidates(front: dict) -> list[dict[str, Any]]:
-    """The distinct programs of a front.json, lowest budget first: {budget, program (every round's rules, text),
-    l1 and degree (per round, on D)}. A budget whose program (all rounds) is a lower budget's is no new candidate."""
+    """The distinct programs of a front.json, lowest budget first: {name, budget, program (every round's rules,
+    text), l1 and degree (per round, on D)}; then the sparse end's nearest-within-r programs (synth/front.range_rows;
+    name near<budget>) of the budgets every round has one for. A program (all rounds) already listed is no new
+    candidate."""
     rounds = sorted(front["rounds"], key=lambda r: r["round"])
     budgets = [b["budget"] for b in rounds[0]["budgets"]]
     if any([b["budget"] for b in r["budgets"]] != budgets for r in rounds):
         raise UserError("the front's rounds list different budgets; search it again with overwrite=true")
+    lists = [("b", budgets, [{row["budget"]: row for row in r["budgets"]} for r in rounds])]
+    near = [{row["budget"]: row for row in r.get("range", [])} for r in rounds]  # absent in fronts before them
+    lists.append(("near", [b for b in near[0] if all(b in n for n in near)], near))
     out, seen = [], set()
-    for i, budget in enumerate(budgets):
-        rows = [r["budgets"][i] for r in rounds]
-        program = Program(tuple(parse(row["program"]).rounds[0] for row in rows))
-        text = to_text(program)
-        if text in seen:
-            continue
-        seen.add(text)
-        out.append({"budget": float(budget), "program": text, "l1": [row["l1"] for row in rows],
-                    "degree_on_d": [row["degree"] for row in rows]})
+    for prefix, keys, by_round in lists:
+        for budget in keys:
+            rows = [r[budget] for r in by_round]
+            program = Program(tuple(parse(row["program"]).rounds[0] for row in rows))
+            text = to_text(program)
+            if text in seen:
+                continue
+            seen.add(text)
+            out.append({"name": f"{prefix}{float(budget):g}", "budget": float(budget), "program": text,
+                        "l1": [row["l1"] for row in rows], "degree_on_d": [row["degree"] for row in rows]})
     return out
+
+
+def about(cand: dict) -> str:
+    """A candidate in words: 'budget 2', or 'budget 2, the nearest agent within a radius'."""
+    near = str(cand.get("name", "")).startswith("near")
+    return f"budget {cand['budget']:g}" + (", the nearest agent within a radius" if near else "")
 
 
 def write_candidate(path: Path, cand: dict, tag: str) -> None:
     """A candidate's program file; left as it is when it already holds the same bytes (its name and content name
     its label and retrained model: rewriting the same text keeps them)."""
-    header = [f"budget {cand['budget']:g} of the degree-budget front of {tag}: L1 on D "
+    header = [f"{about(cand)} of the degree-budget front of {tag}: L1 on D "
               + ", ".join(f"{x:.6g}" for x in cand["l1"]) + ", max in+out on D "
               + ", ".join(f"{x:.4g}" for x in cand["degree_on_d"])]
     text = "".join(f"# {h}\n" for h in header) + cand["program"]
@@ -127,7 +141,8 @@ def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
         return cfg  # no pipeline ran this search's selection: the single-lam program, as before
     rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"picked": dict})
     try:
-        path = rd.front_candidate_file(tag, float(rec["picked"]["budget"]))  # here, wherever the runs root moved
+        path = rd.front_candidate_file(tag, rec["picked"].get("name") or f"b{float(rec['picked']['budget']):g}")
+        # ^ here, wherever the runs root moved (a choice before near candidates names none: a budget's)
     except (KeyError, TypeError, ValueError):
         raise UserError(f"corrupt front choice {choice}; delete it and run `neurosym pipeline {run_args(cfg)}`") \
             from None
@@ -135,8 +150,8 @@ def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
         raise UserError(f"the front choice {choice} names {path}, which is gone; run `neurosym pipeline "
                         f"{run_args(cfg)}` to write it again")
     if verb == "figures" or cfg.baseline.name in (SEARCH, RETRAINED):
-        say(f"{cfg.baseline.name if verb != 'figures' else 'programs'}: the pipeline's pick among the front (budget "
-            f"{rec['picked']['budget']:g}, {path.name}); program=<file> for another")
+        say(f"{cfg.baseline.name if verb != 'figures' else 'programs'}: the pipeline's pick among the front "
+            f"({about(rec['picked'])}, {path.name}); program=<file> for another")
     return dataclasses.replace(cfg, program=str(path))
 
 
@@ -170,17 +185,17 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
             cands = talking
     rows = []
     for k, cand in enumerate(cands, start=1):
-        path = rd.front_candidate_file(tag, cand["budget"])
+        path = rd.front_candidate_file(tag, cand["name"])
         write_candidate(path, cand, tag)
-        say(f"front {k}/{len(cands)}: budget {cand['budget']:g} (max in+out on D "
+        say(f"front {k}/{len(cands)}: {about(cand)} (max in+out on D "
             + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + f"): retraining ({clock(time.perf_counter() - t0)} "
             "elapsed)")
         run(Stage("retrain", RETRAINED), program=str(path))
         v = _val(cfg, RETRAINED, str(path))
         m, h = mean_ci(v["loss"])
-        say(f"front {k}/{len(cands)}: budget {cand['budget']:g}: validation loss {m:.4g} ± {h:.3g}, max in+out "
+        say(f"front {k}/{len(cands)}: {about(cand)}: validation loss {m:.4g} ± {h:.3g}, max in+out "
             f"{v['degree']:.2f}")
-        rows.append({"name": f"b{cand['budget']:g}", "budget": cand["budget"], "program_file": str(path),
+        rows.append({"name": cand["name"], "budget": cand["budget"], "program_file": str(path),
                      "label": v["label"], "program": cand["program"], "l1_on_d": cand["l1"],
                      "degree_on_d": cand["degree_on_d"], "loss": v["loss"], "degree": v["degree"],
                      "max_in": v["max_in"], "max_out": v["max_out"]})
@@ -197,9 +212,10 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
         "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE, "margin": cfg.pipeline.margin,
         "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
         "communication_helps": helps, "no_comm_minus_tf_full": [gap, gap_ci],
-        "picked": {k: chosen[k] for k in ("budget", "program_file", "label", "program", "degree", "loss_mean")},
+        "picked": {k: chosen[k] for k in ("name", "budget", "program_file", "label", "program", "degree",
+                                           "loss_mean")},
         "candidates": ranked, "seconds": time.perf_counter() - t0, "config": cfg.record()})
-    say(f"[green]front selection[/]: budget {chosen['budget']:g}, validation loss {chosen['loss_mean']:.4g}, max "
+    say(f"[green]front selection[/]: {about(chosen)}, validation loss {chosen['loss_mean']:.4g}, max "
         f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - t0)}); prog and "
         "prog-retrained run under it")
     return Path(chosen["program_file"])

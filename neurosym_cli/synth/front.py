@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import torch
 
-from ..dsl.ast import And, Linear, Program, RandomRule, Rule, Test
+from ..dsl.ast import And, ArgMaxRule, Linear, Program, RandomRule, Rule, Test
 from ..dsl.printer import to_text
 from .objective import CachedScorer, Score
 from .search import RoundSpec, search_round
@@ -38,6 +38,40 @@ def silence(feature: str, k: int) -> tuple[Rule, ...]:
     """K rules that never fire: random(filter(f >= 1 and f <= 0, l)) asks for both at once."""
     never = RandomRule(And(Test(Linear(((feature, 1.0),)), 1.0), Test(Linear(((feature, -1.0),)), -0.0)))
     return (never,) * k
+
+
+RANGE_FEATURE = "d"
+"""the other agent's distance (o_ij's first two columns' norm, tasks/features.vector_map's convention)"""
+RANGE_BUDGETS = (1.0, 2.0, 3.0)
+"""the sparse end of the front, where it also offers 'ask the nearest agent within r' (``range_rows``)"""
+
+
+def nearest_within(radius: float) -> tuple[Rule, ...]:
+    """argmax(map(-1.0*d, filter(d <= radius, l))): ask the nearest agent closer than ``radius`` (the paper's dist
+    with a range), one rule."""
+    near = Linear(((RANGE_FEATURE, -1.0),))
+    return (ArgMaxRule(near, Test(near, -radius)),)
+
+
+def range_rows(scorer: CachedScorer, radii: tuple[float, ...], budgets: list[float], unit: float) -> list[dict]:
+    """Per budget of RANGE_BUDGETS within ``budgets``: the nearest-within-r program of the largest r of ``radii``
+    (the distance's quantile grid on D) whose max in+out on D is within it; rows as ``search_front``'s, with
+    ``radius``. Why: at the sparse end the front's lowest-L1 programs imitate the oracle hearing everybody, and an
+    oracle hearing one agent imitates it badly whatever it hears, so L1 ranks them by little; a nearest-within-r
+    program ranks low on L1 yet, retrained, can close the whole gap (docs/fidelity.md, 'Degree-budget front').
+    Empty when the task has no distance feature."""
+    if RANGE_FEATURE not in scorer.data[0].feats.names:
+        return []
+    entries = [(r, _entry(scorer, nearest_within(r), "range")) for r in sorted(r for r in radii if r > 0)]
+    rows = []
+    for b in (b for b in RANGE_BUDGETS if b <= max(budgets) + TOL):
+        ok = [(r, e) for r, e in entries if e.degree <= b + TOL]
+        if ok:
+            r, e = ok[-1]
+            rows.append({"budget": b, "radius": r, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree,
+                         "max_in": e.max_in, "max_out": e.max_out,
+                         "program": to_text(Program((e.rules,))).strip(), "source": "range"})
+    return rows
 
 
 class BudgetScorer:
@@ -81,8 +115,9 @@ def best_within(pool: list[Entry], budget: float) -> Entry | None:
 
 
 def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[Rule, ...]], budgets: list[float],
-                 steps: int, seed: str, gen: torch.Generator) -> list[dict]:
-    """One row per budget, ascending: {budget, l1, l1_ratio, degree, max_in, max_out, program, source}.
+                 steps: int, seed: str, gen: torch.Generator) -> tuple[list[dict], list[dict]]:
+    """One row per budget, ascending: {budget, l1, l1_ratio, degree, max_in, max_out, program, source}; and the
+    sparse end's nearest-within-r rows (``range_rows``).
 
     ``scorer`` must count max in+out (objective paper or scaled); ``archive``: programs the single-lam search found
     (its hall of fame by degree level); ``steps``: proposals of each budget's constrained chain; ``seed``: the
@@ -108,4 +143,7 @@ def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[R
         assert e is not None  # silence (degree 0) is within every budget
         rows.append({"budget": b, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree, "max_in": e.max_in,
                      "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source})
-    return rows
+    from .search import feature_quantiles
+
+    radii = feature_quantiles(scorer, gen).get(RANGE_FEATURE, ())
+    return rows, range_rows(scorer, radii, budgets, unit)
