@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from benchmarks.beyond_paper import BASELINES, OUT, TASKS, verdicts
 
+from neurosym_cli.stages.front_select import about
+
 from .tables import minus
 
 
@@ -30,12 +32,12 @@ def beyond() -> str:
             out.append(f"| {seed} | {c['tf-full']:.3f} | {c['prog-retrained']:.3f} | {c['no-comm']:.3f} | "
                        f"{d['prog-retrained']:.2f} / {d['tf-full']:.2f} | {_pm(r['comm_helps'])} | "
                        f"{_pm(r['prog_better_than_no_comm'])} | {r['gap_closed']:.0%} | {r['degree_share']:.2f} |")
-        out += ["", "The programs picked (the front's budget, then the program's rules):", ""]
+        out += ["", "The programs picked (the front's candidate, then the program's rules):", ""]
         for seed, res in v["results"].items():
             pick = (res.get("front_pick") or {}).get("picked") or {}
             if pick:
                 rules = "; ".join(line for line in pick["program"].splitlines() if line.strip())
-                out.append(f"- seed {seed}, budget {pick['budget']:g}: `{rules}`")
+                out.append(f"- seed {seed}, {about(pick)}: `{rules}`")
         g, s = v["across"]["gap_closed"], v["across"]["degree_share"]
         n = len(v["seeds"])
         across = (f"across the {n} training seeds (mean ± 95 % t half-width over training seeds): gap closed "

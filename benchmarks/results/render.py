@@ -6,6 +6,7 @@ import re
 
 from .appendix import noisy, rl, vmas
 from .beyond import beyond
+from .paper_defaults import paper_defaults
 from .files import PLANNED_SEEDS, TEMPLATE, load_seeds
 from .sections import glance, section, selection, stress
 from .seed_sections import seed_mean, seeds_glance, seeds_section
@@ -33,6 +34,7 @@ def render(template: str, variants: dict[str, dict], run: dict, seed_runs: dict 
         "stress": lambda t: stress(t),
         "vmas": lambda t: vmas(t),
         "beyond": lambda: beyond(),
+        "paper_defaults": lambda: paper_defaults(),
         "rl": lambda t: rl(t, variants),
         "noisy": lambda t, clean: noisy(t, clean),
         "seeds": lambda: seeds_section(by_task),

@@ -1,0 +1,59 @@
+"""{{paper_defaults}}: the paper's claims under today's defaults beside the paper's method, per task over training
+seeds (docs/results/seeds-defaults/, `python benchmarks/beyond_paper.py --suite paper`; docs/results/seeds/,
+benchmarks/run_seeds.py): issue 37's "the paper's tasks lose no claim"."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from benchmarks.beyond_paper import PAPER_TASKS, SUITES
+from neurosym_cli.stages.front_select import about
+
+from .files import PLANNED_SEEDS, SEED_TASKS, load_seeds
+from .seed_sections import claim_over_seeds, seed_claims
+from .tables import shown
+
+DEFAULTS = SUITES["paper"].out
+
+
+def paper_defaults(directory: Path = DEFAULTS) -> str:
+    """Per paper task: the training seeds each method ran, the picks under the defaults, and one row per claim:
+    on how many seeds it holds under the paper's method (its model selection) and under the defaults, with the
+    claim's quantity across seeds; a claim the defaults hold on fewer seeds than the paper's method is marked."""
+    method, defaults = load_seeds(), load_seeds(directory)
+    out = []
+    for task in SEED_TASKS:
+        runs = defaults.get(task, [])
+        out += [f"### {task}", ""]
+        if not runs:
+            out += [f"Not yet run under the defaults (training seeds {', '.join(map(str, PLANNED_SEEDS))} planned; "
+                    f"`python benchmarks/beyond_paper.py --suite paper` resumes across sessions).", ""]
+            continue
+        picks = []
+        for r in runs:
+            res = json.loads(Path(r.source).read_text())
+            pick = (res.get("front_pick") or {}).get("picked") or {}
+            if pick:
+                text, _, _ = shown(pick["program"], task, (r.pick or {}).get("features", "v1"))
+                rules = "; ".join(line.strip() for line in text.splitlines()
+                                  if line.strip() and not line.startswith(("round", "#")))
+                picks.append(f"- seed {r.seed}, {about(pick)}: `{rules}`")
+        names, per_default = seed_claims(task, runs)
+        _, per_method = seed_claims(task, method.get(task, []))
+        digits = 3 if task == "unlabeled-goals" else 2
+        seeds = [r.seed for r in runs]
+        out += [f"Training seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))} under the defaults: "
+                f"`{PAPER_TASKS[task].args[0]} {PAPER_TASKS[task].args[1]} seed=S` with every baseline "
+                "(`neurosym pipeline`, one thread, pinned kernels). The paper's method: its training seeds of the "
+                "section above (`neurosym select`'s pick, MCMC, the single-λ program). Cells: seeds the claim holds "
+                "on / seeds checked; the claim's quantity, mean ± 95 % t half-width across those seeds.", "",
+                "| claim | paper's method | defaults | lost? |", "|---|---|---|---|"]
+        for name in names:
+            m = claim_over_seeds(name, {s: v for s, v in per_method.items() if s in seeds}, digits)
+            d = claim_over_seeds(name, per_default, digits)
+            lost = "**yes**" if d["n"] and m["n"] and d["k"] / d["n"] < m["k"] / m["n"] else "no"
+            out.append(f"| {d['short']} | {m['k']}/{m['n']}; {m['across']} | {d['k']}/{d['n']}; {d['across']} | "
+                       f"{lost} |")
+        out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "", *picks, ""]
+    return "\n".join(out).rstrip("\n")
