@@ -55,5 +55,6 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
             lost = "**yes**" if d["n"] and m["n"] and d["k"] / d["n"] < m["k"] / m["n"] else "no"
             out.append(f"| {d['short']} | {m['k']}/{m['n']}; {m['across']} | {d['k']}/{d['n']}; {d['across']} | "
                        f"{lost} |")
-        out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "", *picks, ""]
+        out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",
+                *picks, ""]
     return "\n".join(out).rstrip("\n")
