@@ -64,7 +64,8 @@ def read_front(path: Path, remake: str) -> dict:
 
 def print_front(front: dict, source: str) -> None:
     """The front of every round as a table: budget, L1 (and its share of silence's), the degrees on D, the
-    program; a row whose program is the previous row's is marked as such (the front is monotone)."""
+    program; a row whose program is the previous row's is marked as such (the front is monotone); then the sparse
+    end's nearest-within-r rows."""
     from rich.table import Table
 
     from ..utils.console import console
@@ -73,7 +74,8 @@ def print_front(front: dict, source: str) -> None:
         name = f"degree-budget front: {source}" + (f", round {r['round']}" if len(front["rounds"]) > 1 else "")
         t = Table(title=name, header_style="bold",
                   caption="per budget of max in+out on D, the lowest L1 found within it (L1 / silence: its share of "
-                          "the action gap that hearing nobody leaves); pick a row and run it with program=FILE "
+                          "the action gap that hearing nobody leaves); 'near' rows: the nearest agent within the "
+                          "largest radius in budget, candidates too; pick a row and run it with program=FILE "
                           "(docs/extending.md, 'The trade-off')")
         for c in ("budget", "L1", "L1 / silence", "max in+out", "max in", "max out", "program"):
             t.add_column(c, justify="left" if c == "program" else "right")
@@ -83,4 +85,7 @@ def print_front(front: dict, source: str) -> None:
             t.add_row(f"{b['budget']:g}", f"{b['l1']:.4f}", f"{b['l1_ratio']:.3f}", f"{b['degree']:.3f}",
                       f"{b['max_in']:.3f}", f"{b['max_out']:.3f}", text)
             previous = b["program"]
+        for b in r.get("range", []):  # the sparse end's nearest-within-r candidates (synth/front.range_rows)
+            t.add_row(f"{b['budget']:g} near", f"{b['l1']:.4f}", f"{b['l1_ratio']:.3f}", f"{b['degree']:.3f}",
+                      f"{b['max_in']:.3f}", f"{b['max_out']:.3f}", b["program"])
         console.print(t)
