@@ -133,3 +133,24 @@ def test_claim_records_of_the_appendices_read_optional_baselines_second_tests_an
     with pytest.raises(ValueError, match="among goes with quantity dominated"):
         _spec(quantity="dominated", a="")
 
+
+
+def test_the_paper_tasks_under_the_defaults_mark_a_claim_lost(tmp_path):
+    """benchmarks/results/paper_defaults.py: a defaults seed file equal to the paper method's loses nothing; one
+    whose prog-retrained is 50 % worse loses 'close to tf-full' on that seed and says so."""
+    import json
+
+    from benchmarks.results.paper_defaults import paper_defaults
+
+    src = json.loads((ROOT / "docs/results/seeds/random-grid-seed0.json").read_text())
+    (tmp_path / "random-grid-seed0.json").write_text(json.dumps(src))
+    page = paper_defaults(tmp_path)
+    rows = [ln for ln in page.split("### random-grid")[1].split("###")[0].splitlines() if ln.startswith("| ")]
+    assert len(rows) > 3 and all(ln.endswith("| no |") for ln in rows[1:]), rows
+    assert "Not yet run under the defaults" in page.split("### random-grid")[0]  # random-cross: no file
+    for row in src["baselines"]["prog-retrained"]["per_seed"]:
+        row["cost"] *= 1.5
+    (tmp_path / "random-grid-seed0.json").write_text(json.dumps(src))
+    page = paper_defaults(tmp_path)
+    lost = [ln for ln in page.splitlines() if ln.endswith("| **yes** |")]
+    assert any("close to tf-full" in ln for ln in lost), lost
