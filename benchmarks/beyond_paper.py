@@ -195,7 +195,12 @@ def main() -> None:
         ap.error(f"no task {unknown[0]!r} in the {a.suite} suite; pick from {', '.join(suite.tasks)}")
     out, runs = Path(a.out or suite.out), Path(a.runs)
     where = f"docs/results/{out.name}"
-    if a.verdicts and a.suite == "beyond":
+    if a.verdicts and a.suite != "beyond":  # the paper's claims, beside the paper's method's (docs/results.md)
+        from benchmarks.results.paper_defaults import paper_defaults
+
+        print(paper_defaults(out))
+        return
+    if a.verdicts:
         for name, v in verdicts(out).items():
             print(f"{name}: {TASKS[name].about}")
             for seed, r in v["seeds"].items():

@@ -106,6 +106,14 @@ def _selected(cfg: RunConfig) -> RunConfig:
     return cfg
 
 
+def _picked(cfg: RunConfig, verb: str) -> RunConfig:
+    """prog and prog-retrained under the pipeline's front pick when there is one and no program= is given, as the
+    command line does (stages/front_select.apply_front_pick)."""
+    from .stages.front_select import apply_front_pick
+
+    return apply_front_pick(cfg, verb)
+
+
 TRAINED = ("checkpoint", "steps", "rollouts", "loss", "seconds")
 """the keys of what train and retrain return (_trained)"""
 
@@ -169,7 +177,8 @@ def evaluate(cfg: RunConfig, baseline: str | None = None, verbose: bool = False)
     from .stages.evaluate import evaluate_baseline
 
     with _quiet(verbose):
-        return evaluate_baseline(_with(_selected(cfg), "eval", baseline), RunInfo(multirun=not verbose))
+        return evaluate_baseline(_picked(_with(_selected(cfg), "eval", baseline), "eval"),
+                                 RunInfo(multirun=not verbose))
 
 
 def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
@@ -187,7 +196,7 @@ def export(cfg: RunConfig, baseline: str | None = None, check: bool = False, ver
     check's report."""
     from .stages.export import export as run
 
-    c = _with(cfg, "export", baseline)
+    c = _picked(_with(cfg, "export", baseline), "export")
     c = dataclasses.replace(c, export=dataclasses.replace(c.export, check=check or c.export.check))
     with _quiet(verbose):
         return run(c, RunInfo(multirun=not verbose))

@@ -178,7 +178,8 @@ class PipelineConfig:
 
     select: str = "front"
     """none (the paper's method, the default before issue 37): the single-lam search's program; front (default):
-    search the degree-budget front (synth.front=true), retrain the oracle under each distinct program of it, and
+    search the degree-budget front (synth.front=true), retrain the oracle under each distinct program of it (and,
+    at its sparse end, under the nearest agent within a radius: up to three more retrainings), and
     take the lowest max in+out whose validation loss is similar to the best (``margin``; silence only where
     no-comm is as good as tf-full on validation)"""
     margin: Optional[float] = 0.02

@@ -129,6 +129,12 @@ def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_pa
     p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=prog-retrained",
              "pipeline.select=none"], tmp_path, check=False)  # the single-lam program: never retrained here
     assert p.returncode != 0 and "neurosym retrain" in p.stderr and "Traceback" not in p.stderr
+    p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=no-comm"], tmp_path)
+    assert "pick among the front" not in p.stdout  # other baselines run as they are
+    p = run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "stress.baselines=[no-comm,prog-retrained]",
+             "stress.agents=[5]", "stress.failure=[0.0]", "stress.seeds=1", "plots=false"], tmp_path)
+    rows = (exp / "stress/stress.csv").read_text()
+    assert "no-comm" in rows and picked["label"] in rows, rows[:300]  # no-comm not skipped; prog-retrained: the pick
 
 
 def test_select_lam_grid_follows_the_task_objective(tmp_path):
@@ -178,3 +184,19 @@ def test_pipeline_with_a_program_file_runs_it_and_neither_searches_nor_chooses(t
     assert "run under program=" in p.stdout and not (exp / "synth").exists() and not (exp / "select").exists()
     evaluated = [d.name for d in (exp / "eval").iterdir() if d.name.startswith("prog-retrained")]
     assert len(evaluated) == 1 and evaluated[0].startswith("prog-retrained-file-nn-"), evaluated
+
+
+def test_a_front_file_with_a_broken_near_row_is_refused_in_one_line(tmp_path):
+    """stages/front.is_front checks the sparse end's near rows as it checks the budgets' (absent: a front written
+    before them, still read)."""
+    from neurosym_cli.utils.io import ArtifactError
+    from neurosym_cli.stages.front import read_front
+
+    row = {"budget": 1.0, "l1": 2.0, "l1_ratio": 0.5, "degree": 1.0, "max_in": 1.0, "max_out": 1.0,
+           "program": "argmax(map(-1.0*d, filter(d <= 0.5, l)))\n"}
+    path = tmp_path / "front.json"
+    path.write_text(json.dumps({"rounds": [{"round": 1, "budgets": [row]}]}))
+    assert read_front(path, "remake")["rounds"][0]["budgets"][0]["budget"] == 1.0  # no near rows: an older front
+    path.write_text(json.dumps({"rounds": [{"round": 1, "budgets": [row], "range": [{**row, "l1": "x"}]}]}))
+    with pytest.raises(ArtifactError, match="remake"):
+        read_front(path, "remake")

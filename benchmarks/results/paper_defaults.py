@@ -52,7 +52,7 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
         for name in names:
             m = claim_over_seeds(name, {s: v for s, v in per_method.items() if s in seeds}, digits)
             d = claim_over_seeds(name, per_default, digits)
-            lost = "**yes**" if d["n"] and m["n"] and d["k"] / d["n"] < m["k"] / m["n"] else "no"
+            lost = ("n/a" if not (d["n"] and m["n"]) else "**yes**" if d["k"] / d["n"] < m["k"] / m["n"] else "no")
             out.append(f"| {d['short']} | {m['k']}/{m['n']}; {m['across']} | {d['k']}/{d['n']}; {d['across']} | "
                        f"{lost} |")
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",

@@ -34,7 +34,7 @@ USES: dict[str, tuple[str, ...]] = {
                 "logger", "optim", "synth"),
     "show-program": ("task", "budget", "baseline", "rules", "lam", "features", "program", "selected", "seed",
                      "runs_root", "synth"),
-    "pipeline": ("task", "budget", "baselines", "rules", "lam", "features", "selected", *_RUN, "overwrite", "logger",
+    "pipeline": ("task", "budget", "baselines", "rules", "lam", "features", "program", "selected", *_RUN, "overwrite", "logger",
                  "plots", "model", "optim", "synth", "select", "rl", "render", "pipeline"),
     "select": ("task", "budget", *_RUN, "overwrite", "logger", "select", "synth", "optim"),
     "tune": ("task", "budget", *_RUN, "overwrite", "logger", "tune", "synth", "optim"),

@@ -43,17 +43,23 @@ def write_front(path: Path, cfg: RunConfig, tag: str, rounds: list[dict]) -> Non
     write_json(path, {"command": "synth", "kind": "front", "task": cfg.task.name, "tag": tag, "rules": cfg.rules,
                       "features": cfg.features, "det": cfg.baseline.det, "lam": cfg.lam,
                       "objective": cfg.synth.objective, "rounds": rounds, "config": cfg.record()})
-    write_csv(path.with_suffix(".csv"), [{"round": r["round"], **row} for r in rounds for row in r["budgets"]])
+    write_csv(path.with_suffix(".csv"), [{"round": r["round"], "kind": kind, "radius": row.get("radius", ""), **row}
+                                         for r in rounds for kind, key in (("budget", "budgets"), ("near", "range"))
+                                         for row in r.get(key, [])])
 
 
 def is_front(rec: object) -> bool:
     """Whether a record is a front.json of this shape: rounds of rows with budget, L1, degrees and program."""
     rounds = rec.get("rounds") if isinstance(rec, dict) else None
-    return isinstance(rounds, list) and bool(rounds) and all(
-        isinstance(r, dict) and isinstance(r.get("budgets"), list) and all(
+
+    def rows(r: dict, key: str) -> bool:  # "range" (the sparse end's near rows) is absent in fronts before it
+        return isinstance(r.get(key, []), list) and all(
             isinstance(b, dict) and isinstance(b.get("program"), str) and all(
                 isinstance(b.get(k), (int, float)) and not isinstance(b.get(k), bool)
-                for k in ("budget", "l1", "l1_ratio", "degree", "max_in", "max_out")) for b in r["budgets"])
+                for k in ("budget", "l1", "l1_ratio", "degree", "max_in", "max_out")) for b in r.get(key, []))
+
+    return isinstance(rounds, list) and bool(rounds) and all(
+        isinstance(r, dict) and isinstance(r.get("budgets"), list) and rows(r, "budgets") and rows(r, "range")
         for r in rounds)
 
 

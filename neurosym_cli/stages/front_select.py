@@ -47,6 +47,9 @@ SEARCH, SILENT_BASELINE = "prog", "no-comm"
 """the baseline whose search's front is chosen among, and the model that hears nobody (the rule's reference)"""
 RETRAINED = "prog-retrained"
 """the baseline each candidate is retrained and validated as"""
+FRONT_RUNS = (SEARCH, RETRAINED)
+"""the baselines that run under the pick (and under a program= of verbs that run several baselines: figures,
+stress); det-prog and det-prog-retrained keep their own search"""
 RULE = ("retrained under each distinct program of the front, validated on budget.val_seeds: among the programs "
         "whose paired 95% Student-t interval of the validation loss difference to the best ends below "
         "pipeline.margin x the best's mean loss, the lowest validation max in+out (lower mean loss on a tie); "
@@ -124,15 +127,18 @@ def write_candidate(path: Path, cand: dict, tag: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------- after the stage
-FOLLOW_PICK = ("eval", "render", "stress", "export", "figures")
-"""the verbs that, given no program=, run prog and prog-retrained under the pipeline's front pick when there is one:
-what the pipeline evaluated is what they show"""
+ONE_BASELINE, SEVERAL = ("eval", "render", "export"), ("stress", "figures")
+"""the verbs that, given no program=, run prog and prog-retrained under the pipeline's front pick when there is one
+(what the pipeline evaluated is what they show): of one baseline= (prog or prog-retrained), or of several (their
+program baselines of FRONT_RUNS)"""
 
 
 def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
     """``cfg`` with program= the pipeline's pick among its search's front (select/front/<tag>.json), when ``verb``
-    follows the pick, no program= is given, pipeline.select is front and the pipeline chose; else ``cfg``."""
-    if verb not in FOLLOW_PICK or cfg.program or cfg.pipeline.select != "front":
+    follows the pick for ``cfg``'s baseline, no program= is given, pipeline.select is front and the pipeline chose;
+    else ``cfg``."""
+    follows = verb in SEVERAL or (verb in ONE_BASELINE and cfg.baseline.name in FRONT_RUNS)
+    if not follows or cfg.program or cfg.pipeline.select != "front":
         return cfg
     rd = RunDir(dataclasses.replace(cfg, baseline=get(SEARCH), program=""))
     tag = rd.program_tag
@@ -149,9 +155,9 @@ def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
     if not path.exists():
         raise UserError(f"the front choice {choice} names {path}, which is gone; run `neurosym pipeline "
                         f"{run_args(cfg)}` to write it again")
-    if verb == "figures" or cfg.baseline.name in (SEARCH, RETRAINED):
-        say(f"{cfg.baseline.name if verb != 'figures' else 'programs'}: the pipeline's pick among the front "
-            f"({about(rec['picked'])}, {path.name}); program=<file> for another")
+    say(f"{cfg.baseline.name if verb in ONE_BASELINE else ', '.join(FRONT_RUNS)}: the pipeline's pick among the "
+        f"front ({about(rec['picked'])}, {path.name}); program=<file> for another, pipeline.select=none for the "
+        "single-lam search's program")
     return dataclasses.replace(cfg, program=str(path))
 
 
@@ -171,11 +177,16 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
         run(stage)
     remake = f"neurosym synth {run_args(cfg)} synth.front=true overwrite=true"
     front = read_front(rd.front_file, remake)
+    if any("range" not in r for r in front["rounds"]):
+        log.warning(f"the front {rd.front_file} was searched before its sparse end offered the nearest agent within a "
+                    f"radius (issue 37): `{remake}` searches it again with them")
     cands = candidates(front)
     tf, nc = _val(cfg, ORACLE), _val(cfg, SILENT_BASELINE)
     helps, gap, gap_ci = communication_helps(tf["loss"], nc["loss"])
-    say(f"front selection {cfg.task.name} ({tag}): {len(cands)} distinct program(s) of {len(front['rounds'][0]['budgets'])} "
-        f"budgets, {cfg.budget.val_seeds} validation seeds; tf-full {mean_ci(tf['loss'])[0]:.4g}, no-comm "
+    near = sum(c["name"].startswith("near") for c in cands)
+    say(f"front selection {cfg.task.name} ({tag}): {len(cands) - near} distinct program(s) of "
+        f"{len(front['rounds'][0]['budgets'])} budgets and {near} nearest-within-r, {cfg.budget.val_seeds} "
+        f"validation seeds; tf-full {mean_ci(tf['loss'])[0]:.4g}, no-comm "
         f"{mean_ci(nc['loss'])[0]:.4g} (no-comm - tf-full {gap:+.3g} ± {gap_ci:.3g}: communication "
         + ("helps, silence is no candidate)" if helps else "does not clearly help, silence may be chosen)"))
     if helps:  # a program silent on D is silent in every episode: no candidate, and no retraining spent on it

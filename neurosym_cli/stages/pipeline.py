@@ -17,16 +17,13 @@ from ..utils.console import clock, left_text, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
+from .front_select import FRONT_RUNS
 from .graph import Stage, plan
 from .results import print_table
 from .synth import synthesize
 from .train import retrain, train
 
 RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": evaluate_baseline}
-
-
-FRONT_RUNS = ("prog", "prog-retrained")
-"""the baselines that run under the program pipeline.select=front picks (their search is the front's)"""
 
 
 def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage, program: str = "") -> tuple[RunConfig, RunInfo]:

@@ -99,8 +99,10 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
 
 
 def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
-    b = with_run(cfg, name)  # program= (the pipeline's front pick) is the program baselines' alone
-    return dataclasses.replace(cfg, baseline=b, program=cfg.program if b.has_program else "")
+    from .front_select import FRONT_RUNS
+
+    b = with_run(cfg, name)  # program= (or the pipeline's front pick) is prog's and prog-retrained's alone
+    return dataclasses.replace(cfg, baseline=b, program=cfg.program if name in FRONT_RUNS else "")
 
 
 def _records(cfg: RunConfig, names: list[str], episode: int,

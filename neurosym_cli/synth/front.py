@@ -47,8 +47,8 @@ RANGE_BUDGETS = (1.0, 2.0, 3.0)
 
 
 def nearest_within(radius: float) -> tuple[Rule, ...]:
-    """argmax(map(-1.0*d, filter(d <= radius, l))): ask the nearest agent closer than ``radius`` (the paper's dist
-    with a range), one rule."""
+    """argmax(map(-1.0*d, filter(d <= radius, l))): ask the nearest agent at most ``radius`` away (the paper's
+    dist with a range), one rule."""
     near = Linear(((RANGE_FEATURE, -1.0),))
     return (ArgMaxRule(near, Test(near, -radius)),)
 
@@ -145,5 +145,7 @@ def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[R
                      "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source})
     from .search import feature_quantiles
 
-    radii = feature_quantiles(scorer, gen).get(RANGE_FEATURE, ())
+    if RANGE_FEATURE not in scorer.data[0].feats.names:
+        return rows, []
+    radii = feature_quantiles(scorer, gen, names=(RANGE_FEATURE,))[RANGE_FEATURE]
     return rows, range_rows(scorer, radii, budgets, unit)
