@@ -36,9 +36,15 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
             pick = (res.get("front_pick") or {}).get("picked") or {}
             if pick:
                 text, _, _ = shown(pick["program"], task, (r.pick or {}).get("features", "v1"))
-                rules = "; ".join(line.strip() for line in text.splitlines()
-                                  if line.strip() and not line.startswith(("round", "#")))
-                picks.append(f"- seed {r.seed}, {about(pick)}: `{rules}`")
+                rounds = [[]]  # rules per round, the round headers dropped ("round 2:" starts a new one)
+                for line in (ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")):
+                    if not line.startswith("round "):
+                        rounds[-1].append(line)
+                    elif rounds[-1]:
+                        rounds.append([])
+                shown_rules = "; ".join(rounds[0]) if len(rounds) == 1 else " ".join(
+                    f"round {k}: {'; '.join(rules)}." for k, rules in enumerate(rounds, start=1))
+                picks.append(f"- seed {r.seed}, {about(pick)}: `{shown_rules}`")
         names, per_default = seed_claims(task, runs)
         _, per_method = seed_claims(task, method.get(task, []))
         digits = 3 if task == "unlabeled-goals" else 2
