@@ -201,7 +201,7 @@ def test_the_sparse_end_offers_the_nearest_agent_within_the_largest_radius_in_bu
     max in+out on D is within it; radius and degree grow with the budget; the text parses back to that program;
     a radius past every distance is the planted nearest-agent program (L1 0 on its own targets)."""
     from neurosym_cli.dsl.parser import parse
-    from neurosym_cli.synth.front import nearest_within, range_rows
+    from neurosym_cli.synth.front import nearest_radii, nearest_within, range_rows
 
     env, pol, data = _planted()
     sc = _scorer(env, pol, data, objective="paper", lam=0.0, cap=1)
@@ -217,6 +217,11 @@ def test_the_sparse_end_offers_the_nearest_agent_within_the_largest_radius_in_bu
             assert sc.score(nearest_within(bigger[0])).degree > r["budget"] + 1e-9
     for a, b in zip(rows, rows[1:]):
         assert b["radius"] >= a["radius"] and b["degree"] >= a["degree"]
+    radii_d = nearest_radii(sc)  # the grid the front uses: quantiles of each agent's nearest distance on D
+    nn = torch.cat([d.feats["d"].expand(d.s, d.n, d.n).masked_fill(torch.eye(d.n, dtype=torch.bool), float("inf"))
+                    .amin(-1).flatten() for d in sc.data])
+    assert list(radii_d) == sorted(set(radii_d)) and len(radii_d) > 3
+    assert float(nn.min()) - 0.01 <= radii_d[0] and radii_d[-1] <= float(nn.max()) + 0.01
     top = sc.score(nearest_within(1e6))
     assert top.l1 < 1e-5  # within every distance: the nearest agent, the planted program
     assert range_rows(sc, radii, [0.0], unit) == []  # no budget of the sparse end asked for

@@ -53,9 +53,27 @@ def nearest_within(radius: float) -> tuple[Rule, ...]:
     return (ArgMaxRule(near, Test(near, -radius)),)
 
 
+def nearest_radii(scorer: CachedScorer, n_q: int = 49) -> tuple[float, ...]:
+    """The radii the sparse end tries: quantiles 2 %..98 % of every agent's distance to its nearest other agent over
+    D's states, rounded to 2 digits (at r, about that share of the agents has someone within r). The nearest
+    distance, not every pair's: in a large team (the swarm, N = 200) even the 2 % quantile of all pairs' distances
+    holds several agents around each, past every budget of the sparse end."""
+    near = []
+    for d in scorer.data:
+        v = d.feats[RANGE_FEATURE].expand(d.s, d.n, d.n).float()
+        self_pair = torch.eye(d.n, dtype=torch.bool, device=v.device).expand(d.s, -1, -1)
+        near.append(v.masked_fill(self_pair, float("inf")).amin(-1).flatten().cpu())  # (S N,)
+    x = torch.cat(near)
+    x = x[torch.isfinite(x)]
+    if x.numel() == 0:
+        return ()
+    q = torch.quantile(x[:1_000_000], torch.linspace(0.02, 0.98, n_q))
+    return tuple(sorted({round(float(r), 2) + 0.0 for r in q}))
+
+
 def range_rows(scorer: CachedScorer, radii: tuple[float, ...], budgets: list[float], unit: float) -> list[dict]:
     """Per budget of RANGE_BUDGETS within ``budgets``: the nearest-within-r program of the largest r of ``radii``
-    (the distance's quantile grid on D) whose max in+out on D is within it; rows as ``search_front``'s, with
+    (``nearest_radii``: the nearest-agent distance's quantile grid on D) whose max in+out on D is within it; rows as ``search_front``'s, with
     ``radius``. Why: at the sparse end the front's lowest-L1 programs imitate the oracle hearing everybody, and an
     oracle hearing one agent imitates it badly whatever it hears, so L1 ranks them by little; a nearest-within-r
     program ranks low on L1 yet, retrained, can close the whole gap (docs/fidelity.md, 'Degree-budget front').
@@ -143,9 +161,6 @@ def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[R
         assert e is not None  # silence (degree 0) is within every budget
         rows.append({"budget": b, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree, "max_in": e.max_in,
                      "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source})
-    from .search import feature_quantiles
-
     if RANGE_FEATURE not in scorer.data[0].feats.names:
         return rows, []
-    radii = feature_quantiles(scorer, gen, names=(RANGE_FEATURE,))[RANGE_FEATURE]
-    return rows, range_rows(scorer, radii, budgets, unit)
+    return rows, range_rows(scorer, nearest_radii(scorer), budgets, unit)
