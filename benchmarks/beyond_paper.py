@@ -117,15 +117,20 @@ def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, .
     from neurosym_cli import api
     from neurosym_cli.run.layout import RunFolder
 
+    from neurosym_cli.stages.front_select import FRONT_RUNS, RETRAINED
+
     run = RunFolder(exp)
+    front = sorted(exp.glob("select/front/*.json"))
+    picked = json.loads(front[-1].read_text())["picked"]["label"] if front else None
     baselines = {}
     for f in run.metrics_files():
         m = json.loads(f.read_text())
+        if m["baseline"] in FRONT_RUNS and picked and m["label"] != picked.replace(RETRAINED, m["baseline"], 1):
+            continue  # another program's evaluation left in the run directory (an earlier front's pick)
         if suite.baselines is None or m["baseline"] in suite.baselines:
             baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
                                         "seconds": m["seconds"]}
     programs = {p.parent.name: p.read_text().strip() for p in run.programs()}
-    front = sorted(exp.glob("select/front/*.json"))
     timings = run.timings_file
     args = run_args(task, seed, Path("R"), extra, suite.baselines)
     res = {"task": task.name, "about": task.about, "seed": seed, "command": "neurosym pipeline " + " ".join(
@@ -188,6 +193,8 @@ def main() -> None:
     ap.add_argument("--stash-every", type=float, default=600.0, help="seconds between stashes (0 = never)")
     ap.add_argument("--extra", nargs="*", default=[], help="more overrides (a tiny rehearsal: budget=tiny)")
     ap.add_argument("--verdicts", action="store_true", help="print the verdicts of the result files and stop")
+    ap.add_argument("--recollect", action="store_true", help="write the given task-seeds' result files again from "
+                    "their run directories (keeping wall time and machine), where both exist, and run nothing")
     a = ap.parse_args()
     suite = SUITES[a.suite]
     names = a.tasks or list(suite.tasks)
@@ -206,6 +213,17 @@ def main() -> None:
             for seed, r in v["seeds"].items():
                 print(f"  seed {seed}: " + ", ".join(f"{k} {'yes' if ok else 'NO'}" for k, ok in r["holds"].items())
                       + f" (gap closed {r['gap_closed']:.2f}, degree share {r['degree_share']:.2f})")
+        return
+    if a.recollect:
+        for seed in a.seeds:
+            for name in names:
+                dest, exp = result_file(out, name, seed), exp_dir(suite.tasks[name], seed, runs, tuple(a.extra))
+                if dest.exists() and exp.is_dir():
+                    old = json.loads(dest.read_text())
+                    res = {**collect(exp, suite.tasks[name], seed, old["wall_s"], tuple(a.extra), suite),
+                           "machine": old["machine"]}
+                    write_result(dest, res)
+                    print(f"{name} seed {seed}: collected again ({'changed' if res != old else 'unchanged'})")
         return
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **PIN}
