@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from benchmarks.beyond_paper import BASELINES, OUT, TASKS, verdicts
+from benchmarks.beyond_paper import BASELINES, OUT, SEEDS, TASKS, verdicts
 
 from neurosym_cli.stages.front_select import about
 
@@ -44,6 +44,10 @@ def beyond() -> str:
                   f"{g[0]:.0%} ± {g[1]:.0%}, share of tf-full's degree {s[0]:.2f} ± {s[1]:.2f}" if n > 1 else
                   "one training seed so far: no interval across seeds")
         tests = {k: sum(r["holds"][k] for r in v["seeds"].values()) for k in first["holds"]}
+        todo = [s for s in SEEDS if s not in v["seeds"]]
+        if todo:  # a task under way: the bar is over seeds 0, 1, 2
+            across += (f"; training seed{'s' if len(todo) > 1 else ''} {', '.join(map(str, todo))} not yet run "
+                       "(benchmarks/beyond_paper.py resumes it)")
         out += ["", f"Losses: mean over the evaluation seeds; differences: paired mean ± 95 % t half-width over the "
                 f"evaluation seeds; {across}. Holds on "
                 + ", ".join(f"{k}: {m} of {n} seeds" for k, m in tests.items()) + ".", ""]
