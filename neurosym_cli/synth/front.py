@@ -58,6 +58,8 @@ def nearest_radii(scorer: CachedScorer, n_q: int = 49) -> tuple[float, ...]:
     D's states, rounded to 2 digits (at r, about that share of the agents has someone within r). The nearest
     distance, not every pair's: in a large team (the swarm, N = 200) even the 2 % quantile of all pairs' distances
     holds several agents around each, past every budget of the sparse end."""
+    if RANGE_FEATURE not in scorer.data[0].feats.names:
+        return ()
     near = []
     for d in scorer.data:
         v = d.feats[RANGE_FEATURE].expand(d.s, d.n, d.n).float()
@@ -67,14 +69,14 @@ def nearest_radii(scorer: CachedScorer, n_q: int = 49) -> tuple[float, ...]:
     x = x[torch.isfinite(x)]
     if x.numel() == 0:
         return ()
-    q = torch.quantile(x[:1_000_000], torch.linspace(0.02, 0.98, n_q))
+    q = torch.quantile(x[:1_000_000], torch.linspace(0.02, 0.98, n_q))  # torch.quantile's input has a size limit
     return tuple(sorted({round(float(r), 2) + 0.0 for r in q}))
 
 
 def range_rows(scorer: CachedScorer, radii: tuple[float, ...], budgets: list[float], unit: float) -> list[dict]:
     """Per budget of RANGE_BUDGETS within ``budgets``: the nearest-within-r program of the largest r of ``radii``
-    (``nearest_radii``: the nearest-agent distance's quantile grid on D) whose max in+out on D is within it; rows as ``search_front``'s, with
-    ``radius``. Why: at the sparse end the front's lowest-L1 programs imitate the oracle hearing everybody, and an
+    (``nearest_radii``: the nearest-agent distance's quantile grid on D) whose max in+out on D is within it; rows
+    as ``search_front``'s, with ``radius``. Why: at the sparse end the front's lowest-L1 programs imitate the oracle hearing everybody, and an
     oracle hearing one agent imitates it badly whatever it hears, so L1 ranks them by little; a nearest-within-r
     program ranks low on L1 yet, retrained, can close the whole gap (docs/fidelity.md, 'Degree-budget front').
     Empty when the task has no distance feature."""
@@ -86,9 +88,7 @@ def range_rows(scorer: CachedScorer, radii: tuple[float, ...], budgets: list[flo
         ok = [(r, e) for r, e in entries if e.degree <= b + TOL]
         if ok:
             r, e = ok[-1]
-            rows.append({"budget": b, "radius": r, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree,
-                         "max_in": e.max_in, "max_out": e.max_out,
-                         "program": to_text(Program((e.rules,))).strip(), "source": "range"})
+            rows.append({**_row(b, e, unit), "radius": r})
     return rows
 
 
@@ -126,6 +126,12 @@ def _entry(scorer: CachedScorer, rules: tuple[Rule, ...], source: str) -> Entry:
     return Entry(rules, s.l1, s.degree, stats["max_in"], stats["max_out"], source)
 
 
+def _row(budget: float, e: Entry, unit: float) -> dict:
+    """One row of the front (front.json): the budget and its program's L1, L1 share of silence's, degrees, text."""
+    return {"budget": budget, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree, "max_in": e.max_in,
+            "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source}
+
+
 def best_within(pool: list[Entry], budget: float) -> Entry | None:
     """The lowest-L1 entry whose degree is within ``budget`` (ties: the lower degree, then the earlier entry)."""
     ok = [e for e in pool if e.degree <= budget + TOL]
@@ -159,8 +165,5 @@ def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[R
     for b in sorted(budgets):
         e = best_within(pool, b)
         assert e is not None  # silence (degree 0) is within every budget
-        rows.append({"budget": b, "l1": e.l1, "l1_ratio": e.l1 / unit, "degree": e.degree, "max_in": e.max_in,
-                     "max_out": e.max_out, "program": to_text(Program((e.rules,))).strip(), "source": e.source})
-    if RANGE_FEATURE not in scorer.data[0].feats.names:
-        return rows, []
+        rows.append(_row(b, e, unit))
     return rows, range_rows(scorer, nearest_radii(scorer), budgets, unit)

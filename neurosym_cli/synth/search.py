@@ -17,12 +17,11 @@ from .objective import CachedScorer
 
 
 def feature_quantiles(scorer: CachedScorer, gen: torch.Generator, n_q: int = 49,
-                      sample: int = 200_000, names: tuple[str, ...] | None = None) -> dict[str, tuple[float, ...]]:
-    """Empirical quantiles (2%..98%) of every feature (or of ``names``) over the dataset's pairs (self pairs
-    excluded)."""
+                      sample: int = 200_000) -> dict[str, tuple[float, ...]]:
+    """Empirical quantiles (2%..98%) of every feature over the dataset's pairs (self pairs excluded)."""
     out = {}
     qs = torch.linspace(0.02, 0.98, n_q)
-    for name in names if names is not None else scorer.data[0].feats.names:
+    for name in scorer.data[0].feats.names:
         vals = []
         for d in scorer.data:
             v = d.feats[name].expand(d.s, d.n, d.n)
