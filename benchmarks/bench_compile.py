@@ -1,8 +1,11 @@
-"""Training rollouts/s with the step eager (compile=off) against compiled (compile=on), ratios measured in one
-process, and the losses of both over the same optimizer steps (issue 39; docs/performance.md, 'The compiled step').
+"""Training rollouts/s with the step eager (compile=off) against compiled (compile=on) and against the fused pair
+kernels (compile=fused), ratios measured in one process, and the losses of each over the same optimizer steps
+(issue 39; docs/performance.md, 'The compiled step').
 
     python benchmarks/bench_compile.py                          # random-cross, B = 50, T = 200, threads 1 and 2
+    python benchmarks/bench_compile.py --modes eager,fused      # without torch.compile's minutes of compiling
     python benchmarks/bench_compile.py --batch 10 --horizon 20 --steps 5      # a quick look
+    python benchmarks/bench_compile.py --round                  # one dense round, eager against fused, N = 10-200
     python benchmarks/bench_compile.py --device cuda            # B = 50 ... 4096: eager, compiled, captured
 
 One optimizer step = the task's reset of `batch` episodes (buckets of equal N), a rollout of each bucket with
@@ -31,22 +34,26 @@ from neurosym_cli.tasks.random_cross import CrossConfig
 from neurosym_cli.utils import compiling
 
 
-def train(env, mode: str, *, batch: int, horizon: int, steps: int, device: torch.device, options: dict | None = None
-          ) -> dict:
-    """``steps`` optimizer steps under compile=mode -> losses per step, seconds of the first step (compilation
-    included) and rollouts/s over the others."""
-    compiling.configure("on" if mode != "eager" else "off", device.type)
+MODES = {"eager": "off", "compiled": "on", "captured": "on", "fused": "fused"}
+"""benchmark mode -> compile= value (captured: compiled with CUDA graphs, the options say so)"""
+
+
+def _steps(env, mode: str, *, batch: int, horizon: int, device: torch.device, options: dict | None = None):
+    """Optimizer steps under compile=mode, one per ``next``: yields (loss, wall seconds, CPU seconds of this
+    process: what the step cost where other jobs share the cores). The mode is put in effect
+    again before each step, so that steps of several modes can alternate in one process."""
+    compiling.configure(MODES[mode], device.type)
     stepmod.reset_compiled()
-    stepmod.OPTIONS.clear()
-    stepmod.OPTIONS.update(options or {"dynamic": False})
     torch.manual_seed(0)
     policy = CommTransformer.for_task(env, ModelConfig()).to(device)
     opt = torch.optim.Adam(policy.parameters(), 1e-3)
     gen = torch.Generator().manual_seed(1)
     rng = Rng(gen, device)
-    losses, times = [], []
-    for _ in range(steps):
-        t0 = time.perf_counter()
+    while True:
+        compiling.configure(MODES[mode], device.type)
+        stepmod.OPTIONS.clear()
+        stepmod.OPTIONS.update(options or {"dynamic": False})
+        t0, c0 = time.perf_counter(), time.process_time()
         total = 0.0
         for bucket in env.reset(batch, gen):
             traj = rollout(env, policy, FullComm(), bucket.to(device), rng, horizon, stats=False)
@@ -57,11 +64,77 @@ def train(env, mode: str, *, batch: int, horizon: int, steps: int, device: torch
         opt.zero_grad(set_to_none=True)
         if device.type == "cuda":
             torch.cuda.synchronize()
-        losses.append(total)
-        times.append(time.perf_counter() - t0)
-    rest = times[1:] or times
-    return {"mode": mode, "losses": losses, "first_s": times[0], "rollouts_per_s": batch * len(rest) / sum(rest),
-            "compile": compiling.record()}
+        yield total, time.perf_counter() - t0, time.process_time() - c0
+
+
+def _summary(mode: str, batch: int, done: list[tuple[float, float, float]], record: dict) -> dict:
+    """A mode's (loss, wall s, CPU s) per step -> losses, the first step's wall seconds (compilation included),
+    rollouts per wall second and per CPU second over the others (their median step: a busy machine slows some
+    steps, not the typical one)."""
+    rest = done[1:] or done
+    wall, cpu = (sorted(r[k] for r in rest)[len(rest) // 2] for k in (1, 2))
+    return {"mode": mode, "losses": [r[0] for r in done], "first_s": done[0][1], "rollouts_per_s": batch / wall,
+            "rollouts_per_cpu_s": batch / cpu, "compile": record}
+
+
+def train(env, mode: str, *, batch: int, horizon: int, steps: int, device: torch.device, options: dict | None = None
+          ) -> dict:
+    """``steps`` optimizer steps under compile=mode -> losses per step, seconds of the first step (compilation
+    included) and rollouts/s over the others."""
+    it = _steps(env, mode, batch=batch, horizon=horizon, device=device, options=options)
+    done = [next(it) for _ in range(steps)]
+    return _summary(mode, batch, done, compiling.record())
+
+
+def alternated(env, modes: list[str], *, batch: int, horizon: int, steps: int, device: torch.device) -> list[dict]:
+    """``train`` for each mode, their steps taken in turn (eager, fused, eager, fused, ...): on a machine shared
+    with other jobs both see the same load, so their ratio holds where back-to-back runs drift apart."""
+    its = {m: _steps(env, m, batch=batch, horizon=horizon, device=device) for m in modes}
+    done: dict[str, list] = {m: [] for m in modes}
+    records = {}
+    for _ in range(steps):
+        for m in modes:
+            done[m].append(next(its[m]))
+            records[m] = compiling.record()
+    return [_summary(m, batch, done[m], records[m]) for m in modes]
+
+
+def round_rows(serves_from: int, shapes=((12, 10), (12, 20), (12, 40), (4, 100), (2, 200)), reps: int = 5
+               ) -> list[dict]:
+    """One dense round's forward and backward (logits, aggregate, post block) at (B, N), eager against the fused
+    pair kernels, taken in turn, median CPU ms of this process over ``reps`` tries; and the MiB the round keeps
+    for backward (autograd's saved tensors). ``serves_from``: the N from which compile=fused uses the kernels."""
+    from statistics import median
+
+    from neurosym_cli.policy.transformer import CommRound
+
+    torch.manual_seed(0)
+    layer = CommRound(16, 32, 0.0)
+
+    def once(b: int, n: int, mode: str) -> tuple[float, float]:
+        compiling.configure(MODES[mode])
+        h, rel = torch.randn(b, n, 16, requires_grad=True), torch.randn(b, n, n, 2, requires_grad=True)
+        mask, kept = torch.rand(b, n, n) > 0.2, []
+        c0 = time.process_time()
+        with torch.autograd.graph.saved_tensors_hooks(lambda t: kept.append(t.numel() * t.element_size()) or t,
+                                                      lambda t: t):
+            y, _ = layer.aggregate(h, layer.logits(h, rel), mask, rel)
+        y.sum().backward()
+        return (time.process_time() - c0) * 1e3, sum(kept) / 2**20
+
+    rows = []
+    for b, n in shapes:
+        runs: dict[str, list] = {"eager": [], "fused": []}
+        for _ in range(reps):
+            for m in runs:
+                runs[m].append(once(b, n, m))
+        e, f = (median(x for x, _ in runs[m]) for m in runs)
+        rows.append({"batch": b, "agents": n, "eager_ms": round(e, 3), "fused_ms": round(f, 3),
+                     "ratio": round(e / f, 2), "eager_saved_mib": round(runs["eager"][0][1], 2),
+                     "fused_saved_mib": round(runs["fused"][0][1], 2),
+                     "fused_serves": n >= serves_from})
+        print(json.dumps(rows[-1]), flush=True)
+    return rows
 
 
 def agreement(a: list[float], b: list[float]) -> float:
@@ -77,11 +150,24 @@ def main() -> None:
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--device", default="cpu", choices=["cpu", "cuda"])
     ap.add_argument("--batches", default="50,256,1024,4096", help="--device cuda: the batch sizes")
-    ap.add_argument("--modes", default="eager,compiled,captured", help="--device cuda: the modes (eager first)")
+    ap.add_argument("--modes", help="the modes, eager first (default: eager,compiled,fused on a CPU, "
+                    "eager,compiled,captured on a GPU)")
     ap.add_argument("--json", default="", help="also write the rows here")
+    ap.add_argument("--round", action="store_true", help="one dense round at N = 10 to 200, eager against fused "
+                    "(the fused kernels serving at every N), and stop")
     args = ap.parse_args()
+    modes = (args.modes or ("eager,compiled,captured" if args.device == "cuda" else "eager,compiled,fused")).split(",")
+    if modes[0] != "eager" or any(m not in MODES for m in modes):
+        sys.exit(f"bench_compile: --modes is eager first, then any of {', '.join(MODES)}")
     env = make_task(CrossConfig(name="random-cross"), horizon=args.horizon)
     rows = []
+    if args.round:
+        from neurosym_cli.policy import edge_kernels
+
+        torch.set_num_threads(1)
+        serves_from, edge_kernels.FUSED_FROM = edge_kernels.FUSED_FROM, 0  # measured where they do not serve too
+        rows = round_rows(serves_from)
+        args.device = "none"
     if args.device == "cuda":
         if not torch.cuda.is_available():
             sys.exit("bench_compile: --device cuda needs a GPU, and torch sees none (run the CPU part without it)")
@@ -92,27 +178,28 @@ def main() -> None:
             modes = {"eager": None, "compiled": {"dynamic": False},
                      "captured": {"dynamic": False, "mode": "reduce-overhead"}}
             runs = [train(env, m, batch=b, horizon=args.horizon, steps=args.steps, device=dev, options=modes[m])
-                    for m in args.modes.split(",")]
+                    for m in modes]
             for r in runs:
                 rows.append({"device": "cuda", "batch": b, **{k: r[k] for k in ("mode", "rollouts_per_s", "first_s")},
                              "vs_eager": r["rollouts_per_s"] / runs[0]["rollouts_per_s"],
                              "loss_rel_diff": agreement(runs[0]["losses"], r["losses"]),
                              "in_effect": r["compile"]["in_effect"], "why_off": r["compile"]["why_off"]})
                 print(json.dumps(rows[-1]), flush=True)
-    else:
+    elif args.device == "cpu":
         dev = torch.device("cpu")
         for th in (int(x) for x in args.threads.split(",")):
             torch.set_num_threads(th)
-            eager = train(env, "eager", batch=args.batch, horizon=args.horizon, steps=args.steps, device=dev)
-            comp = train(env, "compiled", batch=args.batch, horizon=args.horizon, steps=args.steps, device=dev)
-            rows.append({"device": "cpu", "threads": th, "batch": args.batch, "horizon": args.horizon,
-                         "eager_rollouts_per_s": eager["rollouts_per_s"],
-                         "compiled_rollouts_per_s": comp["rollouts_per_s"],
-                         "ratio": comp["rollouts_per_s"] / eager["rollouts_per_s"],
-                         "compile_s": comp["compile"]["compile_seconds"], "first_step_s": comp["first_s"],
-                         "compiled_in_effect": comp["compile"]["in_effect"],
-                         "loss_rel_diff": agreement(eager["losses"], comp["losses"])})
-            print(json.dumps(rows[-1]), flush=True)
+            runs = alternated(env, modes, batch=args.batch, horizon=args.horizon, steps=args.steps, device=dev)
+            for r in runs[1:]:
+                rows.append({"device": "cpu", "threads": th, "batch": args.batch, "horizon": args.horizon,
+                             "mode": r["mode"], "eager_rollouts_per_s": runs[0]["rollouts_per_s"],
+                             "rollouts_per_s": r["rollouts_per_s"],
+                             "ratio": r["rollouts_per_s"] / runs[0]["rollouts_per_s"],
+                             "cpu_ratio": r["rollouts_per_cpu_s"] / runs[0]["rollouts_per_cpu_s"],
+                             "compile_s": r["compile"]["compile_seconds"], "first_step_s": r["first_s"],
+                             "in_effect": r["compile"]["in_effect"],
+                             "loss_rel_diff": agreement(runs[0]["losses"], r["losses"])})
+                print(json.dumps(rows[-1]), flush=True)
     if args.json:
         from pathlib import Path
 

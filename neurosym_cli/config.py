@@ -280,7 +280,9 @@ class RunConfig:
     """whether the one environment step (observe, the transformer's rounds, dynamics, cost) runs compiled by
     torch.compile (utils/compiling.py): off is the eager step (every committed number, bit for bit); on compiles it
     once per bucket shape (eager's numbers up to float rounding; one line and the eager step where it cannot
-    compile); auto is what was measured faster: the eager step today (docs/performance.md, 'The compiled step').
+    compile); fused runs a dense round's pair work in hand-fused CPU kernels (policy/edge_kernels.py; about 1.25x
+    in training, eager's numbers up to float rounding); auto is the eager step today (docs/performance.md, 'The
+    compiled step').
     Every artifact records it in its ``runtime``; a resume under another compile mode is refused"""
     runs_root: str = "outputs"
     """the directory that holds every run (NEUROSYM_RUNS; default outputs, in the working directory)"""

@@ -1,5 +1,5 @@
-"""compile=auto|on|off (utils/compiling.py, step.py): the compiled step gives eager's losses and gradients up to
-float rounding on the paper's tasks, falls back to the eager step in one line where it cannot compile, is recorded
+"""compile=auto|on|fused|off (utils/compiling.py, step.py, policy/edge_kernels.py): the compiled step and the fused
+kernels give eager's losses and gradients up to float rounding on the paper's tasks, fall back to the eager step in one line where it cannot compile, is recorded
 in every artifact's runtime, and a resume under another compile mode is refused."""
 
 import pytest
@@ -8,6 +8,7 @@ import torch
 from neurosym_cli import step as stepmod
 from neurosym_cli.config import ConfigError, ModelConfig, RunConfig
 from neurosym_cli.policy import CommTransformer
+from neurosym_cli.policy import edge_kernels
 from neurosym_cli.policy.comm import CommBase, FullComm, NearestComm
 from neurosym_cli.rollout import rollout
 from neurosym_cli.run.checkpoints import refuse_other_modes
@@ -82,6 +83,66 @@ def test_compiled_gradients_agree_with_eager(name):
         torch.testing.assert_close(gc, ge, rtol=1e-4, atol=1e-6)
 
 
+@pytest.mark.parametrize("name", sorted(TASKS))
+def test_fused_kernels_give_eager_gradients(name, monkeypatch):
+    monkeypatch.setattr(edge_kernels, "FUSED_FROM", 2)  # every team size here, the small ones too
+    calls = []
+    for fn in ("key_logits", "edge_messages"):
+        real = getattr(edge_kernels, fn)
+        monkeypatch.setattr(edge_kernels, fn, lambda *a, _f=real, _n=fn: calls.append(_n) or _f(*a))
+    loss_e, grads_e = _losses_and_grads(TASKS[name](), "off")
+    assert not calls  # compile=off never reaches the kernels
+    loss_f, grads_f = _losses_and_grads(TASKS[name](), "fused")
+    assert compiling.record()["in_effect"] == "fused"
+    assert {"key_logits", "edge_messages"} <= set(calls)  # every task here has a dense round
+    assert loss_f == pytest.approx(loss_e, rel=1e-5)
+    for ge, gf in zip(grads_e, grads_f):
+        torch.testing.assert_close(gf, ge, rtol=1e-4, atol=1e-5)
+
+
+@pytest.mark.parametrize("pair_dim", [2, 4])
+def test_fused_kernels_match_the_torch_round_with_their_own_backward(pair_dim):
+    """The kernels against the torch expressions they replace, at a pair width other than 2 too, with weights
+    that are zero where nobody is heard (the inputs' and the linears' gradients)."""
+    torch.manual_seed(0)
+    b, n, d = 3, 7, 16
+    q, rel = torch.randn(b, n, d, requires_grad=True), torch.randn(b, n, n, pair_dim, requires_grad=True)
+    w = (torch.softmax(torch.randn(b, n, n), -1) * (torch.rand(b, n, n) > 0.3)).requires_grad_()
+    key, msg = torch.nn.Linear(pair_dim, d), torch.nn.Linear(pair_dim, d)
+    leaves = [q, rel, w, *key.parameters(), *msg.parameters()]
+    g_logits, g_agg = torch.randn(b, n, n), torch.randn(b, n, d)
+
+    def grads(logits, agg):
+        torch.autograd.backward([logits, agg], [g_logits, g_agg])
+        out = [t.grad.clone() for t in leaves]
+        for t in leaves:
+            t.grad = None
+        return logits.detach(), agg.detach(), out
+
+    ref = grads((torch.relu(key(rel)) * q.unsqueeze(2)).sum(-1),
+                (w.unsqueeze(-1) * torch.relu(msg(rel.transpose(1, 2)))).sum(2))
+    got = grads(edge_kernels.key_logits(q, rel, key), edge_kernels.edge_messages(w, rel, msg))
+    torch.testing.assert_close(got[0], ref[0], rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(got[1], ref[1], rtol=1e-5, atol=1e-5)
+    for r, g in zip(ref[2], got[2]):
+        torch.testing.assert_close(g, r, rtol=1e-4, atol=1e-5)
+
+
+def test_fused_without_numba_or_off_a_cpu_is_one_line_and_eager(monkeypatch, capsys):
+    from neurosym_cli.tasks import pair_kernels
+
+    monkeypatch.setattr(pair_kernels, "AVAILABLE", False)
+    assert compiling.configure("fused", "cpu") is False
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compile=fused" in err[0] and "numba is not installed" in err[0] and "eager" in err[0]
+    assert compiling.record()["in_effect"] == "off" and not edge_kernels.serves(torch.zeros(1, 30, 30, 2))
+    monkeypatch.setattr(pair_kernels, "AVAILABLE", True)
+    compiling.configure("fused", "cpu")
+    n = edge_kernels.FUSED_FROM
+    assert edge_kernels.serves(torch.zeros(1, n, n, 2)) and not edge_kernels.serves(torch.zeros(1, n, n, 2).double())
+    assert not edge_kernels.serves(torch.zeros(1, n - 1, n - 1, 2))  # a small team: the eager round is faster
+
+
 def test_off_and_auto_run_the_eager_step(monkeypatch):
     monkeypatch.setattr(stepmod, "_compile", lambda *a: pytest.fail("compile=off must not compile"))
     for mode in ("off", "auto"):
@@ -149,7 +210,7 @@ def test_compile_key_is_typed():
         RunConfig(cmd="train", exp_dir="outputs/x", compile="fast")
 
 
-@pytest.mark.parametrize("was,now", [("on", "off"), ("off", "on")])
+@pytest.mark.parametrize("was,now", [("on", "off"), ("off", "on"), ("fused", "off"), ("off", "fused")])
 def test_resume_under_another_compile_mode_is_refused(was, now, monkeypatch):
     monkeypatch.setattr(compiling, "compiler", lambda: "g++")
     compiling.configure(now)

@@ -34,6 +34,7 @@ from ..dsl.interpret import dedup_valid, picks_to_mask
 from ..tasks.base import Observation
 from ..tasks.pairs import Offsets
 from ..utils.ops import softmax_last
+from . import edge_kernels
 
 Selector = Callable[[Tensor, int], Tensor]
 """(logits (B, N, N), round) -> mask (B, N, N) bool, True where agent i hears agent j."""
@@ -123,6 +124,8 @@ class CommRound(nn.Module):
     def logits(self, h: Tensor, rel: Tensor) -> Tensor:
         """h: (B, N, D) state embedding, rel: (B, N, N, Dp) -> (B, N, N) attention logits l_ij."""
         q = self.query(h) * self.scale  # (B, N, D)
+        if edge_kernels.serves(rel):  # compile=fused: one pass over the pairs, nothing (B, N, N, D) stored
+            return edge_kernels.key_logits(q, rel, self.key_edge)
         k = torch.relu(self.key_edge(rel))  # (B, N, N, D): k_ij from o_ij
         # multiply-and-sum beats a batched mat-vec here (many (N, D) x (D,) products are 2x slower on CPU)
         return (k * q.unsqueeze(2)).sum(-1)
@@ -145,6 +148,8 @@ class CommRound(nn.Module):
         batched product) plus sum_j a_ij ReLU(W_m o_ji), so no (B, N, N, D) value tensor is built."""
         attn = selected_attention(logits, mask, dense=True)  # (B, N, N), rows sum to 1 or 0
         w = self.drop(attn)
+        if edge_kernels.serves(rel):  # compile=fused
+            return self._post(x, torch.bmm(w, self.value(x)) + edge_kernels.edge_messages(w, rel, self.msg_edge)), attn
         # the message j -> i uses the sender's view o_ji: transpose the 2-d input, not the D-wide output
         msg_edge = torch.relu(self.msg_edge(rel.transpose(1, 2)))  # (B, N, N, D): [i, j] from o_ji
         agg = torch.bmm(w, self.value(x)) + (w.unsqueeze(-1) * msg_edge).sum(2)  # (B, N, D)

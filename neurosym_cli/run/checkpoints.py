@@ -34,9 +34,9 @@ def _at(payload: dict[str, Any], *keys: str) -> Any:
 
 
 def _compiled_now(cfg: "RunConfig") -> str:
-    from ..utils.compiling import enabled
+    from ..utils.compiling import in_effect
 
-    return "on" if enabled() else "off"  # in effect: compile=auto is off on a CPU, on where it compiles
+    return in_effect()  # compile=auto is off; on where it compiles; fused where the fused kernels run
 
 
 @dataclass(frozen=True)

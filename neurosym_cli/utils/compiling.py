@@ -2,9 +2,12 @@
 
 ``off`` is the eager step, bit for bit what every committed number was made with. ``on`` compiles the step with
 torch.compile (inductor) once per bucket shape; where compilation fails, or no C++ compiler is found, one line says
-so and the eager step runs. ``auto`` is what was measured faster on this kind of device: the eager step on a CPU
-and on a GPU (docs/performance.md, 'The compiled step': the compiled step was slower or barely faster in training,
-and its compile time is minutes). Every artifact's ``runtime`` records the mode asked for and the one in effect.
+so and the eager step runs. ``fused`` is the eager step with a dense round's pair work (edge keys, logits, edge
+messages and their gradients) in hand-fused numba kernels (policy/edge_kernels.py), on a CPU; elsewhere, or
+without numba, one line says so and the eager step runs. ``auto`` is the eager step on a CPU and on a GPU: the
+compiled step was slower in training and compiles for minutes, and the fused one, faster (about 1.25x), does not
+give eager's numbers bit for bit, which every committed number and the README need (docs/performance.md, 'The
+compiled step'). Every artifact's ``runtime`` records the mode asked for and the one in effect.
 """
 
 from __future__ import annotations
@@ -16,10 +19,11 @@ from pathlib import Path
 
 CHOICES = {"auto": "the eager step where compiling was not measured faster (today: everywhere)",
            "on": "the step compiled by torch.compile (inductor), eager where it cannot compile",
+           "fused": "the eager step with a dense round's pair work in hand-fused CPU kernels (numba), about 1.25x",
            "off": "the eager step (every committed number)"}
 """compile values -> what they do"""
 
-_state: dict[str, object] = {"asked": "off", "on": False, "why": None, "seconds": 0.0, "shapes": 0}
+_state: dict[str, object] = {"asked": "off", "on": False, "fused": False, "why": None, "seconds": 0.0, "shapes": 0}
 
 
 def check(value: str) -> str | None:
@@ -54,15 +58,38 @@ def compiler() -> str | None:
 
 def configure(mode: str, device: str = "cpu") -> bool:
     """Put ``compile=mode`` in effect for this process on ``device``; returns whether the step compiles. Without a
-    C++ compiler (a CPU device) one line says so and the eager step runs."""
+    C++ compiler (a CPU device) one line says so and the eager step runs; so does ``fused`` off a CPU or without
+    numba (the fused kernels then never run: policy/edge_kernels.py ``serves``)."""
     on = resolve(mode, device)
-    _state.update(asked=mode, on=on, why=None)
+    _state.update(asked=mode, on=on, fused=mode == "fused", why=None)
+    if mode == "fused":
+        return _configure_fused(device)
     if on and not str(device).startswith("cuda") and compiler() is None:
         fall_back("no C++ compiler was found (set CXX, or install g++)")
         return False
     if on:
         os.environ.setdefault("TORCHINDUCTOR_CACHE_DIR", str(cache_dir()))
     return on
+
+
+def _configure_fused(device: str) -> bool:
+    """compile=fused on ``device``: the fused kernels need a CPU and numba; else one line and the eager step."""
+    from .device import resolve_device
+
+    where = resolve_device(str(device)).type
+    if where != "cpu":
+        fall_back(f"the fused kernels run on a CPU, and this run is on {where}")
+    else:
+        from ..tasks.pair_kernels import AVAILABLE
+
+        if not AVAILABLE:
+            fall_back("numba is not installed (pip install numba)")
+    return False
+
+
+def fused() -> bool:
+    """Whether a dense round's pair work runs in the fused kernels now (compile=fused in effect)."""
+    return bool(_state["fused"])
 
 
 def enabled() -> bool:
@@ -72,10 +99,10 @@ def enabled() -> bool:
 
 def fall_back(why: str) -> None:
     """Compilation cannot be used in this process: the eager step runs from here on, said in one line."""
-    if _state["on"] or _state["why"] is None:
+    if _state["on"] or _state["fused"] or _state["why"] is None:
         print(f"neurosym: warning: compile={_state['asked']}: {why}; the eager step runs (compile=off)",
               file=sys.stderr)
-    _state.update(on=False, why=why)
+    _state.update(on=False, fused=False, why=why)
 
 
 def compiled(seconds: float) -> None:
@@ -84,7 +111,12 @@ def compiled(seconds: float) -> None:
     _state["shapes"] = int(_state["shapes"]) + 1  # type: ignore[call-overload]
 
 
+def in_effect() -> str:
+    """The mode in effect: 'on' (compiled), 'fused' (the fused kernels) or 'off' (the eager step)."""
+    return "on" if _state["on"] else "fused" if _state["fused"] else "off"
+
+
 def record() -> dict[str, object]:
     """The compile mode as recorded in every artifact's runtime: asked, in effect, why not, and the compile cost."""
-    return {"asked": _state["asked"], "in_effect": "on" if _state["on"] else "off", "why_off": _state["why"],
+    return {"asked": _state["asked"], "in_effect": in_effect(), "why_off": _state["why"],
             "compile_seconds": round(float(_state["seconds"]), 3), "shapes_compiled": _state["shapes"]}  # type: ignore[arg-type]
