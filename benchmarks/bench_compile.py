@@ -6,6 +6,7 @@ kernels (compile=fused), ratios measured in one process, and the losses of each 
     python benchmarks/bench_compile.py --modes eager,fused      # without torch.compile's minutes of compiling
     python benchmarks/bench_compile.py --batch 10 --horizon 20 --steps 5      # a quick look
     python benchmarks/bench_compile.py --round                  # one dense round, eager against fused, N = 10-200
+    python benchmarks/bench_compile.py --swarm 100 --batch 4 --horizon 50 --modes eager,fused   # swarm, N = 200
     python benchmarks/bench_compile.py --device cuda            # B = 50 ... 4096: eager, compiled, captured
 
 One optimizer step = the task's reset of `batch` episodes (buckets of equal N), a rollout of each bucket with
@@ -41,7 +42,8 @@ MODES = {"eager": "off", "compiled": "on", "captured": "on", "fused": "fused"}
 def _steps(env, mode: str, *, batch: int, horizon: int, device: torch.device, options: dict | None = None):
     """Optimizer steps under compile=mode, one per ``next``: yields (loss, wall seconds, CPU seconds of this
     process: what the step cost where other jobs share the cores). The mode is put in effect
-    again before each step, so that steps of several modes can alternate in one process."""
+    again before each step, and so is torch's global random state (dropout's), so that steps of several modes can
+    alternate in one process and each still draws what it would alone."""
     compiling.configure(MODES[mode], device.type)
     stepmod.reset_compiled()
     torch.manual_seed(0)
@@ -49,7 +51,11 @@ def _steps(env, mode: str, *, batch: int, horizon: int, device: torch.device, op
     opt = torch.optim.Adam(policy.parameters(), 1e-3)
     gen = torch.Generator().manual_seed(1)
     rng = Rng(gen, device)
+    mine = torch.random.get_rng_state(), (torch.cuda.get_rng_state() if device.type == "cuda" else None)
     while True:
+        torch.random.set_rng_state(mine[0])
+        if mine[1] is not None:
+            torch.cuda.set_rng_state(mine[1])
         compiling.configure(MODES[mode], device.type)
         stepmod.OPTIONS.clear()
         stepmod.OPTIONS.update(options or {"dynamic": False})
@@ -64,6 +70,7 @@ def _steps(env, mode: str, *, batch: int, horizon: int, device: torch.device, op
         opt.zero_grad(set_to_none=True)
         if device.type == "cuda":
             torch.cuda.synchronize()
+        mine = torch.random.get_rng_state(), (torch.cuda.get_rng_state() if device.type == "cuda" else None)
         yield total, time.perf_counter() - t0, time.process_time() - c0
 
 
@@ -153,13 +160,20 @@ def main() -> None:
     ap.add_argument("--modes", help="the modes, eager first (default: eager,compiled,fused on a CPU, "
                     "eager,compiled,captured on a GPU)")
     ap.add_argument("--json", default="", help="also write the rows here")
+    ap.add_argument("--swarm", type=int, default=0, help="the swarm with this many agents per group (two groups; "
+                    "dense below task.sparse_from = 256 agents) instead of random-cross")
     ap.add_argument("--round", action="store_true", help="one dense round at N = 10 to 200, eager against fused "
                     "(the fused kernels serving at every N), and stop")
     args = ap.parse_args()
     modes = (args.modes or ("eager,compiled,captured" if args.device == "cuda" else "eager,compiled,fused")).split(",")
     if modes[0] != "eager" or any(m not in MODES for m in modes):
         sys.exit(f"bench_compile: --modes is eager first, then any of {', '.join(MODES)}")
-    env = make_task(CrossConfig(name="random-cross"), horizon=args.horizon)
+    if args.swarm:
+        from neurosym_cli.tasks.swarm import SwarmConfig
+
+        env = make_task(SwarmConfig(name="swarm", agents_per_group=args.swarm), horizon=args.horizon)
+    else:
+        env = make_task(CrossConfig(name="random-cross"), horizon=args.horizon)
     rows = []
     if args.round:
         from neurosym_cli.policy import edge_kernels
@@ -191,7 +205,8 @@ def main() -> None:
             torch.set_num_threads(th)
             runs = alternated(env, modes, batch=args.batch, horizon=args.horizon, steps=args.steps, device=dev)
             for r in runs[1:]:
-                rows.append({"device": "cpu", "threads": th, "batch": args.batch, "horizon": args.horizon,
+                rows.append({"device": "cpu", "task": env.cfg.name, "agents": 2 * args.swarm or "10-40",
+                             "threads": th, "batch": args.batch, "horizon": args.horizon,
                              "mode": r["mode"], "eager_rollouts_per_s": runs[0]["rollouts_per_s"],
                              "rollouts_per_s": r["rollouts_per_s"],
                              "ratio": r["rollouts_per_s"] / runs[0]["rollouts_per_s"],

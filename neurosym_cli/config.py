@@ -280,8 +280,8 @@ class RunConfig:
     """whether the one environment step (observe, the transformer's rounds, dynamics, cost) runs compiled by
     torch.compile (utils/compiling.py): off is the eager step (every committed number, bit for bit); on compiles it
     once per bucket shape (eager's numbers up to float rounding; one line and the eager step where it cannot
-    compile); fused runs a dense round's pair work in hand-fused CPU kernels (policy/edge_kernels.py; about 1.25x
-    in training, eager's numbers up to float rounding); auto is the eager step today (docs/performance.md, 'The
+    compile); fused runs a dense round's pair work in hand-fused CPU kernels (policy/edge_kernels.py; 1.8x
+    training a 200-agent swarm, a few % at the paper's sizes; eager's numbers up to float rounding); auto is the eager step today (docs/performance.md, 'The
     compiled step').
     Every artifact records it in its ``runtime``; a resume under another compile mode is refused"""
     runs_root: str = "outputs"
