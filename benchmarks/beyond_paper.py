@@ -167,6 +167,26 @@ def verdict(res: dict) -> dict:
                       "closes half the gap": closed >= 0.5, "a third of the degree": share <= 1 / 3}}
 
 
+def front_reach(res: dict) -> dict | None:
+    """What the front's candidates reached on validation (the pipeline's choice, stages/front_select.py), to say
+    why a seed misses the half-gap bar: each candidate's share of the gap from no-comm to tf-full on the validation
+    seeds, the best of them, the range of their mean losses and the retraining length; None without a front pick."""
+    pick = res.get("front_pick") or {}
+    cands = [c for c in pick.get("candidates", []) if not c.get("excluded")]
+    if not cands or not pick.get("tf_full") or not pick.get("no_comm"):
+        return None
+    tf, nc = (sum(pick[k]["loss"]) / len(pick[k]["loss"]) for k in ("tf_full", "no_comm"))
+    shares = {c["name"]: (nc - c["loss_mean"]) / (nc - tf) for c in cands} if nc > tf else {}
+    if not shares:
+        return None
+    best = max(shares, key=shares.get)
+    losses = [c["loss_mean"] for c in cands]
+    return {"candidates": len(cands), "best": best, "best_share": shares[best], "loss_range": (min(losses), max(losses)),
+            "tf_full": tf, "no_comm": nc, "half": nc - (nc - tf) / 2, "retrain_rollouts": pick.get("retrain_rollouts"),
+            "best_degree": next(c["degree"] for c in cands if c["name"] == best),
+            "picked": (pick.get("picked") or {}).get("name")}
+
+
 def verdicts(out: Path) -> dict[str, dict]:
     """Per task: its seeds' verdicts and, across the seeds, the mean ± 95 % t half-width over training seeds."""
     by_task: dict[str, dict] = {}

@@ -33,3 +33,31 @@ def test_the_collector_takes_the_picks_evaluation_and_not_a_stale_one(tmp_path):
     assert sorted(res["baselines"]) == ["no-comm", "prog-retrained", "tf-full"]
     assert res["baselines"]["prog-retrained"]["label"] == pick
     assert verdict(res)["cost"]["prog-retrained"] == 7.0
+
+
+def _front(picked: str, means: dict) -> dict:
+    """A front choice with tf-full at 100 and no-comm at 200 on validation, candidates at the given mean losses."""
+    return {"picked": {"name": picked}, "retrain_rollouts": 50, "tf_full": {"loss": [99.0, 101.0]},
+            "no_comm": {"loss": [199.0, 201.0]},
+            "candidates": [{"name": n, "loss_mean": m, "degree": float(i), "excluded": False}
+                           for i, (n, m) in enumerate(means.items())]}
+
+
+def test_why_a_seed_misses_half_the_gap_is_read_from_the_fronts_validation():
+    from benchmarks.beyond_paper import front_reach
+    from benchmarks.results.beyond import _why_not_half
+
+    reach = front_reach({"front_pick": _front("b1", {"b1": 160.0, "b2": 140.0, "near1": 190.0})})
+    assert reach["best"] == "b2" and abs(reach["best_share"] - 0.6) < 1e-9 and reach["half"] == 150.0
+    assert reach["loss_range"] == (140.0, 190.0) and reach["picked"] == "b1"
+    assert front_reach({"front_pick": {}}) is None
+
+    def seeds(missed: bool, front: dict) -> dict:
+        return {"seeds": {0: {"holds": {"closes half the gap": not missed}, "gap_closed": 0.4}},
+                "results": {0: {"front_pick": front}}}
+
+    assert _why_not_half(seeds(False, _front("b1", {"b1": 140.0}))) == []  # the bar holds: nothing to explain
+    picked_below = "\n".join(_why_not_half(seeds(True, _front("b1", {"b1": 160.0, "b2": 140.0}))))
+    assert "half was within reach on validation, and the pick (b1)" in picked_below
+    none_reach = "\n".join(_why_not_half(seeds(True, _front("b1", {"b1": 160.0, "b2": 170.0}))))
+    assert "no candidate reached half" in none_reach and "closes 40% there" in none_reach
