@@ -223,6 +223,9 @@ def main() -> None:
     out, runs = Path(a.out or suite.out), Path(a.runs)
     where = f"docs/results/{out.name}"
     if a.verdicts and a.suite != "beyond":  # the paper's claims, beside the paper's method's (docs/results.md)
+        import sys
+
+        sys.path.insert(0, str(ROOT))  # run as a script: the package benchmarks.results from the repository root
         from benchmarks.results.paper_defaults import paper_defaults
 
         print(paper_defaults(out))
