@@ -20,6 +20,8 @@ Shapes: B episodes, N agents, D model width, P the task's pair width.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import torch
 from torch import Tensor, nn
@@ -151,9 +153,31 @@ at 40, 3.6x at 200)"""
 
 def serves(rel: Tensor) -> bool:
     """Whether the fused kernels serve a dense round over ``rel`` (B, N, N, P): compile=fused in effect, a CPU
-    tensor, float32 (numba present: compiling.configure says so when it is not), N >= FUSED_FROM."""
-    return (compiling.fused() and rel.device.type == "cpu" and rel.dtype == torch.float32
-            and rel.shape[1] >= FUSED_FROM)
+    tensor, float32 (numba present: compiling.configure says so when it is not), N >= FUSED_FROM. The first time
+    they do in a process, they are compiled (``_warm``)."""
+    on = (compiling.fused() and rel.device.type == "cpu" and rel.dtype == torch.float32
+          and rel.shape[1] >= FUSED_FROM)
+    if on and not _WARM:
+        _warm(rel.shape[-1])
+    return on
+
+
+_WARM: list[float] = []
+"""the seconds the kernels took to compile or load in this process, once they have"""
+
+
+def _warm(p: int) -> None:
+    """Compile the four kernels (or load them from numba's on-disk cache) on tiny inputs of pair width ``p``, and
+    count the time in the runtime's compile_seconds: about 6 s cold, under 1 s from the cache."""
+    t0 = time.perf_counter()
+    q, g = np.zeros((1, 2, 1), np.float32), np.zeros((1, 2, 2), np.float32)
+    planes, wt, bias = np.zeros((p, 1, 2, 2), np.float32), np.zeros((p, 1), np.float32), np.zeros(1, np.float32)
+    _logits_bwd(g, q, planes, wt, bias)
+    _logits_fwd(q, planes, wt, bias)
+    _messages_fwd(g, planes, wt, bias)
+    _messages_bwd(q, g, planes, wt, bias)
+    _WARM.append(time.perf_counter() - t0)
+    compiling.compiled(_WARM[0], shapes=0)
 
 
 def _np(t: Tensor) -> np.ndarray:

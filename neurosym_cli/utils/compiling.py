@@ -106,10 +106,11 @@ def fall_back(why: str) -> None:
     _state.update(on=False, fused=False, why=why)
 
 
-def compiled(seconds: float) -> None:
-    """Count one bucket shape compiled, taking ``seconds`` (the first call, compilation included)."""
+def compiled(seconds: float, shapes: int = 1) -> None:
+    """Count ``shapes`` bucket shapes compiled, taking ``seconds`` (the first call, compilation included); the fused
+    kernels count their compilation (or load from numba's cache) as seconds of no shape."""
     _state["seconds"] = float(_state["seconds"]) + seconds  # type: ignore[arg-type]
-    _state["shapes"] = int(_state["shapes"]) + 1  # type: ignore[call-overload]
+    _state["shapes"] = int(_state["shapes"]) + shapes  # type: ignore[call-overload]
 
 
 def in_effect() -> str:
