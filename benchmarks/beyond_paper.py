@@ -181,7 +181,8 @@ def front_reach(res: dict) -> dict | None:
         return None
     best = max(shares, key=shares.get)
     losses = [c["loss_mean"] for c in cands]
-    return {"candidates": len(cands), "best": best, "best_share": shares[best], "loss_range": (min(losses), max(losses)),
+    return {"candidates": len(cands), "best": best, "best_share": shares[best],
+            "loss_range": (min(losses), max(losses)),
             "tf_full": tf, "no_comm": nc, "half": nc - (nc - tf) / 2, "retrain_rollouts": pick.get("retrain_rollouts"),
             "best_degree": next(c["degree"] for c in cands if c["name"] == best),
             "picked": (pick.get("picked") or {}).get("name")}

@@ -20,6 +20,15 @@ COMBINED = "+".join(["tensorboard"] * bool(importlib.util.find_spec("tensorboard
 EXP = "random-grid/tiny/seed0"
 
 
+@pytest.fixture(autouse=True)
+def _own_stores(monkeypatch):
+    """The stores under the test's runs root, whatever the developer's shell points at: no server, no account."""
+    for name in ("MLFLOW_TRACKING_URI", "MLFLOW_EXPERIMENT_NAME", "WANDB_API_KEY", "WANDB_PROJECT", "WANDB_ENTITY",
+                 "WANDB_BASE_URL", "WANDB_DIR"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("WANDB_MODE", "offline")
+
+
 def _csv(path: Path) -> list[dict]:
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -34,7 +43,18 @@ def _mlflow_runs(root: Path) -> dict:
     client = MlflowClient(tracking_uri=f"sqlite:///{root / 'mlflow/mlflow.db'}")
     exp = client.get_experiment_by_name("neurosym")
     runs = client.search_runs([exp.experiment_id], run_view_type=ViewType.ALL)
-    return client, {(r.info.lifecycle_stage, r.data.tags["neurosym.run"]): r for r in runs}
+    return client, {(r.info.lifecycle_stage, r.data.tags["neurosym.run"]): r for r in runs
+                    if "neurosym.run" in r.data.tags}  # the stages' runs; their parents hold neurosym.group
+
+
+def _mlflow_parents(root: Path) -> dict:
+    """group -> the parent run of one baseline of one (task, budget, seed)."""
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(tracking_uri=f"sqlite:///{root / 'mlflow/mlflow.db'}")
+    exp = client.get_experiment_by_name("neurosym")
+    return {r.data.tags["neurosym.group"]: r for r in client.search_runs([exp.experiment_id])
+            if "neurosym.group" in r.data.tags}
 
 
 def _tag(tracked: Path) -> str:
@@ -46,7 +66,19 @@ def _check_mlflow(tracked: Path) -> None:
     """Every stage of the pipeline is one finished MLflow run with its tags, config, steps, summary and files."""
     tag = _tag(tracked)
     client, runs = _mlflow_runs(tracked)
-    assert sorted(k for _, k in runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/synth-{tag}", f"{EXP}/train-oracle"]
+    assert sorted(k for _, k in runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/figures", f"{EXP}/synth-{tag}",
+                                          f"{EXP}/train-oracle"]
+    # one parent run per baseline of this (task, budget, seed), its stages nested under it
+    parents = _mlflow_parents(tracked)
+    assert sorted(parents) == [f"{EXP}/figures", f"{EXP}/prog-{tag}", f"{EXP}/tf-full"]
+    assert parents[f"{EXP}/tf-full"].data.tags["seed"] == "0" and parents[f"{EXP}/tf-full"].info.status == "FINISHED"
+    nest = {k: r.data.tags["mlflow.parentRunId"] for (_, k), r in runs.items()}
+    assert nest[f"{EXP}/train-oracle"] == parents[f"{EXP}/tf-full"].info.run_id
+    assert nest[f"{EXP}/synth-{tag}"] == nest[f"{EXP}/eval-prog-{tag}"] == parents[f"{EXP}/prog-{tag}"].info.run_id
+    # the pipeline's pictures: the table's plot, the training curves and the figures of the run
+    pictures = {a.path for a in client.list_artifacts(runs["active", f"{EXP}/figures"].info.run_id)}
+    assert {"figure2.png", "curves.png"} <= pictures and len(pictures) == len(list(
+        (tracked / EXP / "figures").glob("*.png"))) + 2
     train = runs["active", f"{EXP}/train-oracle"]
     assert train.info.status == "FINISHED"
     assert {k: train.data.tags[k] for k in ("task", "budget", "baseline", "scheme", "seed", "stage")} == {
@@ -139,7 +171,8 @@ def _check_wandb(tracked: Path) -> None:
     """Every stage of the pipeline is one offline W&B run with its group, config, steps, summary and files."""
     tag = _tag(tracked)
     runs = _wandb_runs(tracked)
-    assert sorted(runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/synth-{tag}", f"{EXP}/train-oracle"]
+    assert sorted(runs) == [f"{EXP}/eval-prog-{tag}", f"{EXP}/figures", f"{EXP}/synth-{tag}", f"{EXP}/train-oracle"]
+    assert {"figure2.png", "curves.png"} <= set(runs[f"{EXP}/figures"][3])  # the pipeline's pictures
     head, rows, summary, files, folder = runs[f"{EXP}/train-oracle"]
     assert head.job_type == "train" and head.run_group == f"{EXP}/tf-full" and head.project == "neurosym"
     assert {"random-grid", "tiny", "tf-full", "0", "train"} <= set(head.tags)
@@ -172,7 +205,7 @@ def test_a_tracked_pipeline_lands_in_every_installed_store(tmp_path):
     if not TRACKERS:
         pytest.skip("neither mlflow nor wandb is installed (pip install -e '.[mlflow,wandb]')")
     run(["pipeline", "budget=tiny", "task=random-grid", "threads=1", "baselines=[prog]", "pipeline.select=none",
-         f"logger={COMBINED}"], tmp_path, timeout=600)
+         f"logger={COMBINED}"], tmp_path, timeout=600, plots=True)
     if "mlflow" in TRACKERS:
         _check_mlflow(tmp_path)
     if "wandb" in TRACKERS:

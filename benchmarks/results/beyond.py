@@ -32,11 +32,12 @@ def _why_not_half(v: dict) -> list[str]:
             verdict = (f"half was within reach on validation, and the pick ({reach['picked']}), the lowest degree "
                        "statistically similar to the best, fell below it")
         lines.append(f"- seed {seed}: the {reach['candidates']} front candidates, each retrained for "
-                     f"{reach['retrain_rollouts']} rollouts, validated at {lo:.1f}-{hi:.1f} (tf-full {reach['tf_full']:.1f}, "
-                     f"no-comm {reach['no_comm']:.1f}, half the gap {reach['half']:.1f}); the best, {reach['best']} "
+                     f"{reach['retrain_rollouts']} rollouts, validated at {lo:.1f}-{hi:.1f} "
+                     f"(tf-full {reach['tf_full']:.1f}, no-comm {reach['no_comm']:.1f}, half the gap {reach['half']:.1f}); the best, {reach['best']} "
                      f"(max in+out {reach['best_degree']:.2f}), closes {reach['best_share']:.0%} there: {verdict}")
     if lines:
-        lines = ["", "Why the half-gap bar is missed, from the front's validation (stages/front_select.py):", ""] + lines
+        lines = ["", "Why the half-gap bar is missed, from the front's validation (stages/front_select.py):", "",
+                 *lines]
     return lines
 
 

@@ -21,6 +21,7 @@ from .front_select import FRONT_RUNS
 from .graph import Stage, plan
 from .results import print_table
 from .synth import synthesize
+from .tracked import track_files
 from .train import retrain, train
 
 RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": evaluate_baseline}
@@ -181,12 +182,15 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     from ..config import UserError
     from .render import make_figures
 
+    made: dict[str, str] = {}
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
         if cfg.plots:  # of the program prog-retrained ran under (the front's pick, under pipeline.select=front)
             log.info("pipeline: the figures (%s elapsed)", clock(time.perf_counter() - t0))
-            make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
+            made = make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
+    if cfg.plots:  # the table's plot, the training curves and the figures, to the trackers that keep files
+        track_files(cfg, [RunDir(cfg).figure2_file, RunDir(cfg).curves_file, *map(Path, made.values())])
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
         f"seed {cfg.seed}) in {clock(time.perf_counter() - t0)}")
     return results

@@ -5,7 +5,8 @@ The store is MLFLOW_TRACKING_URI's when set (a server, a database, ...); else a 
 <runs_root>/mlflow/mlflow.db with the artifacts in <runs_root>/mlflow/artifacts: no server, no network
 (`mlflow ui --backend-store-uri sqlite:///outputs/mlflow/mlflow.db` shows it). The experiment is
 MLFLOW_EXPERIMENT_NAME's, else "neurosym". A run that starts over replaces (deletes, restorably) the run of its
-key; a resumed one continues it."""
+key; a resumed one continues it. The runs of one baseline of one (task, budget, training seed) are the children of
+one parent run (``TrackedRun.group``), so each baseline and seed is one run in MLflow's list, its stages nested."""
 
 from __future__ import annotations
 
@@ -24,8 +25,10 @@ STORE, DATABASE, ARTIFACTS = "mlflow", "mlflow.db", "artifacts"
 """the default store's folder under the runs root, its SQLite file and its artifact folder"""
 EXPERIMENT = "neurosym"
 """the experiment of every run unless MLFLOW_EXPERIMENT_NAME names another"""
-KEY = "neurosym.run"
-"""the tag that holds a run's key (TrackedRun.key): how a resume finds its run"""
+KEY, GROUP = "neurosym.run", "neurosym.group"
+"""the tags that hold a run's key (TrackedRun.key: how a resume finds its run) and a parent run's group"""
+GROUP_TAGS = ("task", "budget", "baseline", "seed")
+"""the tags a parent run carries: what its children share"""
 BATCH, PARAMS_PER_CALL, FLUSH_SECONDS = 1000, 100, 10.0
 """metrics per log_batch (MLflow's limit), parameters per call (its limit), and the longest a metric waits"""
 
@@ -44,7 +47,8 @@ def _held(folder: Path) -> Iterator[None]:
 
 
 def _client(run: TrackedRun):
-    """(MlflowClient, experiment id) of the configured store; one line when it cannot be opened."""
+    """(MlflowClient, experiment id, the default store's folder or None) of the configured store; one line when it
+    cannot be opened."""
     try:
         from mlflow.tracking import MlflowClient
     except ImportError:
@@ -69,8 +73,8 @@ def _client(run: TrackedRun):
             exp = client.get_experiment_by_name(name)
             if exp is None:
                 where = (folder / ARTIFACTS).as_uri() if folder else None
-                return client, client.create_experiment(name, artifact_location=where)
-            return client, exp.experiment_id
+                return client, client.create_experiment(name, artifact_location=where), folder
+            return client, exp.experiment_id, folder
     except ImportError:  # the SQLite store's sqlalchemy or alembic
         raise missing("mlflow") from None
     except Exception as e:  # a server that does not answer, a database that is not one: what it said, one line
@@ -87,8 +91,11 @@ class MLflowTracker(Tracker):
     """One run of an MLflow store (``_client``), opened or resumed at construction."""
 
     def __init__(self, run: TrackedRun):
-        self.client, exp = _client(run)  # first: a missing package is one line
+        self.client, exp, folder = _client(run)  # first: a missing package is one line
         from mlflow.entities import Param, RunStatus, ViewType
+
+        with _held(folder) if folder else nullcontext():  # a sweep's jobs of one baseline: one parent
+            parent = self._parent(exp, run)
 
         found = self.client.search_runs([exp], filter_string=f"tags.`{KEY}` = '{run.key}'",
                                         run_view_type=ViewType.ACTIVE_ONLY, order_by=["attributes.start_time DESC"])
@@ -99,13 +106,27 @@ class MLflowTracker(Tracker):
         else:  # a run that starts over replaces the one of its key, as its CSV file does
             for old in found:
                 self.client.delete_run(old.info.run_id)
-            self.id = self.client.create_run(exp, run_name=run.key, tags={KEY: run.key, **run.tags}).info.run_id
+            self.id = self.client.create_run(exp, run_name=run.key, tags={
+                KEY: run.key, **run.tags, "mlflow.parentRunId": parent}).info.run_id
             have = {}
         params = [Param(k, str(v)[:6000]) for k, v in run.params.items() if k not in have]  # MLflow's longest
         for i in range(0, len(params), PARAMS_PER_CALL):
             self.client.log_batch(self.id, params=params[i:i + PARAMS_PER_CALL])
         self.pending: list = []
         self.flushed = time.monotonic()
+
+    def _parent(self, exp: str, run: TrackedRun) -> str:
+        """The id of the parent run of ``run.group``, made the first time (finished at once: it holds no data)."""
+        from mlflow.entities import ViewType
+
+        found = self.client.search_runs([exp], filter_string=f"tags.`{GROUP}` = '{run.group}'",
+                                        run_view_type=ViewType.ACTIVE_ONLY, max_results=1)
+        if found:
+            return found[0].info.run_id
+        made = self.client.create_run(exp, run_name=run.group, tags={
+            GROUP: run.group, **{k: run.tags[k] for k in GROUP_TAGS if k in run.tags}}).info.run_id
+        self.client.set_terminated(made, "FINISHED")
+        return made
 
     def log(self, step: int, metrics: Mapping[str, float]) -> None:
         from mlflow.entities import Metric

@@ -82,6 +82,12 @@ class TrackedRun:
     start: int = 0
     """the step resumed from; 0: a run that starts over, which replaces the one of the same key"""
 
+    @property
+    def group(self) -> str:
+        """What its runs share: one baseline of one (task, budget, training seed),
+        <task dir>/<budget>/seed<S>/<baseline> (its train, synth, retrain and eval runs; W&B's group, MLflow's parent run)."""
+        return f"{self.key.rsplit('/', 1)[0]}/{self.tags.get('baseline', '')}"
+
 
 class Tracker:
     """A sink for one tracked run; the CSV files are the stages' own, so the plain tracker does nothing more."""
@@ -183,6 +189,9 @@ def _wandb(run: TrackedRun) -> Tracker:
 
 OPENERS = {"tensorboard": _tensorboard, "mlflow": _mlflow, "wandb": _wandb}
 """tracker -> how it opens for one run (its package imported only then)"""
+
+FILES = ("mlflow", "wandb")
+"""the trackers that keep files (artifacts); TensorBoard keeps scalars only"""
 
 LOGGERS = ("csv", *OPENERS)
 """the choices of ``logger=``, joined by + to combine them"""

@@ -62,7 +62,7 @@ class WandbTracker(Tracker):
             self.run = wandb.init(
                 mode=_mode(), dir=str(root), project=os.environ.get("WANDB_PROJECT") or PROJECT, id=ident,
                 resume="allow" if old else None, name=run.key, job_type=t.get("stage"),
-                group="/".join(run.key.split("/")[:3] + [t.get("baseline", "")]),
+                group=run.group,
                 tags=[v[:64] for v in t.values()], config={**run.params, **{f"neurosym.{k}": v for k, v in t.items()}},
                 settings=wandb.Settings(silent=True, console="off", disable_git=True, x_disable_stats=True,
                                         save_code=False))
