@@ -48,7 +48,7 @@ EXAMPLES = """examples:
   neurosym pipeline -m seed=0,1,2 budget=paper hydra/launcher=slurm hydra.launcher.partition=cpu
   neurosym render task=two-groups-cross episode=2   # an episode as a GIF and a PNG (render.format=mp4)
   neurosym figures task=two-groups-cross            # attention maps, group paths, rule regions
-  neurosym export task=two-groups-cross             # program as JSON/Python/C, policy as ONNX, golden vectors
+  neurosym export task=two-groups-cross             # program (JSON/Python/C), policy (TorchScript, .pt2, ONNX), golden vectors
   neurosym export task=two-groups-cross --check     # replay them in a process without neurosym
   neurosym <command> --help        groups and options of one command
   neurosym <command> --cfg job     the composed config, without running

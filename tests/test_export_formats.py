@@ -167,3 +167,18 @@ def test_an_unknown_format_or_exporter_is_one_line():
                         ({"export.onnx": "fast"}, "export.onnx must be one of dynamo, legacy")):
         with pytest.raises(ns.ConfigError, match=words):
             ns.compose("export", over, task="random-cross", budget="tiny")
+
+
+def test_the_export_command_prints_its_own_lines_not_the_exporters_chatter(tmp_path):
+    """onnxscript and onnx_ir log ~80 INFO lines per dynamo export; the console shows neurosym's and Hydra's INFO
+    lines only, other libraries' from WARNING on (conf/hydra/job_logging/rich.yaml)."""
+    pytest.importorskip("onnxscript", reason="the dynamo exporter needs onnxscript (the onnx extra)")
+    from test_cli import run
+
+    run(["train", "task=random-grid", "budget=tiny", "threads=1"], tmp_path)
+    p = run(["export", "task=random-grid", "budget=tiny", "threads=1", "baseline=tf-full",
+             "export.formats=[onnx]"], tmp_path)
+    said = p.stdout + p.stderr
+    assert "exported tf-full" in said and "neurosym export:" in said
+    assert "constant folding" not in said and "unused nodes" not in said, said
+    assert len(said.splitlines()) < 20, said
