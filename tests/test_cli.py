@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -328,6 +329,12 @@ def test_pipeline_tiny_reuses_artifacts(tmp_path):
     base = "baselines=[tf-full,dist,prog,prog-retrained,dt,dt-retrained]"
     p = run(["pipeline", "task=random-grid", "budget=tiny", base], tmp_path, plots=True)
     assert "pipeline done" in p.stdout
+    # long work says how long it has left: every stage of the pipeline as a whole, and each part of its figures
+    lines = [ln for ln in p.stdout.splitlines() if "pipeline stage " in ln]
+    n = int(lines[0].split("pipeline stage 1/")[1].split(":")[0])
+    assert len(lines) == n and all(re.search(r"\(\d+:\d\d elapsed, (\d+:\d\d|\?) left", ln) for ln in lines)
+    figures = [ln for ln in p.stdout.splitlines() if "figures random-grid " in ln]
+    assert figures and all(" left" in ln for ln in figures)
     exp = tmp_path / "random-grid/tiny/seed0"
     # prog and prog-retrained run under the program the front selection picked (pipeline.select=front)
     picked = picked_labels(tmp_path, "task=random-grid", "budget=tiny")

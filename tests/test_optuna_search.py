@@ -211,3 +211,17 @@ def test_two_processes_of_a_joblib_sweep_share_one_study(tmp_path):
     finished = [t for t in trials if t.state.is_finished() and t.state != optuna.trial.TrialState.FAIL]
     assert len(finished) >= 4 and {t.user_attrs["worker"] for t in trials} <= {0, 1}, p.stdout[-2000:]
     print("trials per worker:", {w: sum(t.user_attrs["worker"] == w for t in trials) for w in (0, 1)})
+
+
+@pytest.mark.slow
+def test_two_slurm_jobs_share_one_study(tmp_path):
+    """The cluster path: submitit's local executor runs each tune.worker as its own job, as SLURM would on many
+    machines (hydra/launcher=slurm_local, the cluster extra), all on one SQLite study."""
+    pytest.importorskip("hydra_plugins.hydra_submitit_launcher", reason="the cluster extra (submitit launcher)")
+    optuna = _optuna()
+    run(["train", *COMMON], tmp_path)
+    p = run(["tune", "-m", *COMMON, *SPACE, "tune.trials=4", "tune.worker=0,1", "hydra/launcher=slurm_local"],
+            tmp_path, timeout=900)
+    trials = _trials(optuna, _cfg(tmp_path, "tune.trials=4"))
+    finished = [t for t in trials if t.state.is_finished() and t.state != optuna.trial.TrialState.FAIL]
+    assert len(finished) >= 4 and {t.user_attrs["worker"] for t in trials} == {0, 1}, p.stdout[-2000:]
