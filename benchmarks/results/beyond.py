@@ -3,11 +3,16 @@
 
 from __future__ import annotations
 
+import json
+
 from benchmarks.beyond_paper import BASELINES, OUT, SEEDS, TASKS, front_reach, verdicts
 
 from neurosym_cli.stages.front_select import about
 
 from .tables import minus
+
+CONTROL_SCRIPT = "swarm_control.py"
+"""the script that runs and collects the controls (benchmarks/)"""
 
 
 def _pm(x: tuple[float, float], digits: int = 3) -> str:
@@ -39,6 +44,25 @@ def _why_not_half(v: dict) -> list[str]:
         lines = ["", "Why the half-gap bar is missed, from the front's validation (stages/front_select.py):", "",
                  *lines]
     return lines
+
+
+def _control(name: str) -> list[str]:
+    """The control of docs/results/beyond/controls/<task>-seed<S>.json (benchmarks/swarm_control.py), if run: the
+    oracle retrained under silence against retrained under the front's programs, as long and from the same oracle."""
+    out = []
+    for path in sorted((OUT / "controls").glob(f"{name}-seed*.json")):
+        c = json.loads(path.read_text())
+        out += ["", f"Control, training seed {c['seed']} (`python benchmarks/{CONTROL_SCRIPT}`; "
+                f"docs/results/beyond/controls/{path.name}): {c['about']} tf-full {c['tf_full']:.1f}, no-comm "
+                f"{c['no_comm']:.1f} (the pipeline's).", "",
+                "| program | retrained for | loss | max in+out | gap closed | − silence (paired) |", "|---|---|---|---|---|---|"]
+        for r in sorted(c["rows"], key=lambda r: (r["retrain_rollouts"], r["program"] != "silent", r["program"])):
+            vs = _pm(r["minus_silent"], 1) if r["minus_silent"] and r["program"] != "silent" else ""
+            out.append(f"| {r['program']} | {r['retrain_rollouts']} rollouts | {_pm(r['cost'], 1).lstrip('+')} | "
+                       f"{r['max_in_out']:.2f} | {r['gap_closed']:.0%} | {vs} |")
+        out += ["", "Loss: mean ± 95 % t half-width over the 20 test seeds; − silence: the program's loss minus "
+                "silence's retrained as long, paired over the test seeds (negative: the program is better)."]
+    return out
 
 
 def beyond() -> str:
@@ -79,6 +103,8 @@ def beyond() -> str:
         out += ["", f"Losses: mean over the evaluation seeds; differences: paired mean ± 95 % t half-width over the "
                 f"evaluation seeds; {across}. Holds on "
                 + ", ".join(f"{k}: {m} of {n} seeds" for k, m in tests.items()) + ".", ""]
+        control = _control(name)
+        out += [*control[1:], ""] if control else []
     missing = [n for n in TASKS if n not in found]
     if missing:
         out += ["Not yet run (benchmarks/beyond_paper.py resumes them across sessions): "
