@@ -299,3 +299,14 @@ def test_tf32_is_off_where_a_gpu_runs():
     finally:
         torch.set_float32_matmul_precision(before[0])
         torch.backends.cudnn.allow_tf32 = before[1]
+
+
+def test_fused_kernels_step_aside_for_a_tracer():
+    """An export (torch.jit.trace, torch.export) or torch.compile records torch ops: the eager round serves it."""
+    compiling.configure("fused")
+    n = edge_kernels.FUSED_FROM
+    rel = torch.zeros(1, n, n, 2)
+    assert edge_kernels.serves(rel)
+    seen = []
+    torch.jit.trace(lambda r: seen.append(edge_kernels.serves(r)) or r + 1, (rel,), check_trace=False)
+    assert seen == [False]

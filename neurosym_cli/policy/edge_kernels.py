@@ -153,10 +153,11 @@ at 40, 3.6x at 200)"""
 
 def serves(rel: Tensor) -> bool:
     """Whether the fused kernels serve a dense round over ``rel`` (B, N, N, P): compile=fused in effect, a CPU
-    tensor, float32 (numba present: compiling.configure says so when it is not), N >= FUSED_FROM. The first time
-    they do in a process, they are compiled (``_warm``)."""
+    tensor, float32 (numba present: compiling.configure says so when it is not), N >= FUSED_FROM, and no tracer
+    (export, torch.compile) recording the round. The first time they do in a process, they are compiled (``_warm``)."""
     on = (compiling.fused() and rel.device.type == "cpu" and rel.dtype == torch.float32
-          and rel.shape[1] >= FUSED_FROM)
+          and rel.shape[1] >= FUSED_FROM
+          and not torch.jit.is_tracing() and not torch.compiler.is_compiling())  # an export traces torch ops
     if on and not _WARM:
         _warm(rel.shape[-1])
     return on
