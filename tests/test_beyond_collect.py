@@ -61,3 +61,26 @@ def test_why_a_seed_misses_half_the_gap_is_read_from_the_fronts_validation():
     assert "half was within reach on validation, and the pick (b1)" in picked_below
     none_reach = "\n".join(_why_not_half(seeds(True, _front("b1", {"b1": 160.0, "b2": 170.0}))))
     assert "no candidate reached half" in none_reach and "closes 40% there" in none_reach
+
+
+def test_a_control_against_silence_is_rendered_with_its_verdict(tmp_path, monkeypatch):
+    import benchmarks.results.beyond as page
+
+    (tmp_path / "controls").mkdir()
+    rows = [{"program": "silent", "retrain_rollouts": 200, "cost": [150.0, 2.0], "max_in_out": 0.0, "gap_closed": 0.5,
+             "text": "random(filter(d <= -1.0, l))", "minus_silent": None},
+            {"program": "b1", "retrain_rollouts": 200, "cost": [149.0, 2.0], "max_in_out": 0.9, "gap_closed": 0.51,
+             "text": "# a comment\nrandom(filter(d <= 1.0, l))", "minus_silent": [-1.0, 3.0]}]
+    (tmp_path / "controls/swarm-200-seed1.json").write_text(json.dumps(
+        {"seed": 1, "about": "A control.", "tf_full": 100.0, "no_comm": 200.0, "rows": rows}))
+    monkeypatch.setattr(page, "OUT", tmp_path)
+    text = "\n".join(page._control("swarm-200"))
+    assert "| silent | 200 rollouts | 150.0 ± 2.0 | 0.00 | 50% |  |" in text
+    assert "| b1 | 200 rollouts | 149.0 ± 2.0 | 0.90 | 51% | −1.0 ± 3.0 |" in text
+    assert "b1: `random(filter(d <= 1.0, l))`" in text  # the program's rules, not its comment
+    assert "0 of the 1 program-and-length pairs beat silence" in text and "retraining the oracle's weights" in text
+    rows[1]["minus_silent"] = [-5.0, 3.0]
+    (tmp_path / "controls/swarm-200-seed1.json").write_text(json.dumps(
+        {"seed": 1, "about": "A control.", "tf_full": 100.0, "no_comm": 200.0, "rows": rows}))
+    assert "1 of the 1 program-and-length pairs beat silence retrained as long." in "\n".join(page._control("swarm-200"))
+    assert page._control("consensus") == []

@@ -38,7 +38,8 @@ def _why_not_half(v: dict) -> list[str]:
                        "statistically similar to the best, fell below it")
         lines.append(f"- seed {seed}: the {reach['candidates']} front candidates, each retrained for "
                      f"{reach['retrain_rollouts']} rollouts, validated at {lo:.1f}-{hi:.1f} "
-                     f"(tf-full {reach['tf_full']:.1f}, no-comm {reach['no_comm']:.1f}, half the gap {reach['half']:.1f}); the best, {reach['best']} "
+                     f"(tf-full {reach['tf_full']:.1f}, no-comm {reach['no_comm']:.1f}, half the gap "
+                     f"{reach['half']:.1f}); the best, {reach['best']} "
                      f"(max in+out {reach['best_degree']:.2f}), closes {reach['best_share']:.0%} there: {verdict}")
     if lines:
         lines = ["", "Why the half-gap bar is missed, from the front's validation (stages/front_select.py):", "",
@@ -55,13 +56,23 @@ def _control(name: str) -> list[str]:
         out += ["", f"Control, training seed {c['seed']} (`python benchmarks/{CONTROL_SCRIPT}`; "
                 f"docs/results/beyond/controls/{path.name}): {c['about']} tf-full {c['tf_full']:.1f}, no-comm "
                 f"{c['no_comm']:.1f} (the pipeline's).", "",
-                "| program | retrained for | loss | max in+out | gap closed | − silence (paired) |", "|---|---|---|---|---|---|"]
+                "| program | retrained for | loss | max in+out | gap closed | − silence (paired) |",
+                "|---|---|---|---|---|---|"]
         for r in sorted(c["rows"], key=lambda r: (r["retrain_rollouts"], r["program"] != "silent", r["program"])):
             vs = _pm(r["minus_silent"], 1) if r["minus_silent"] and r["program"] != "silent" else ""
             out.append(f"| {r['program']} | {r['retrain_rollouts']} rollouts | {_pm(r['cost'], 1).lstrip('+')} | "
                        f"{r['max_in_out']:.2f} | {r['gap_closed']:.0%} | {vs} |")
+        texts = {r["program"]: "; ".join(ln for ln in r["text"].splitlines() if ln.strip() and not ln.startswith("#"))
+                 for r in c["rows"]}
+        out += ["", "The programs: " + "; ".join(f"{k}: `{t}`" for k, t in sorted(texts.items())) + "."]
         out += ["", "Loss: mean ± 95 % t half-width over the 20 test seeds; − silence: the program's loss minus "
                 "silence's retrained as long, paired over the test seeds (negative: the program is better)."]
+        judged = [r for r in c["rows"] if r["program"] != "silent" and r["minus_silent"]]
+        better = [r for r in judged if r["minus_silent"][0] + r["minus_silent"][1] < 0]
+        if judged:
+            out += ["", f"{len(better)} of the {len(judged)} program-and-length pairs beat silence retrained as long"
+                    + (": what the pipeline's prog-retrained gains over its no-comm here comes from retraining the "
+                       "oracle's weights, not from what the programs let agents hear." if not better else ".")]
     return out
 
 
