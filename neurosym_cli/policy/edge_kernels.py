@@ -11,7 +11,9 @@ used (``FUSED_FROM``); the rest of the step is unchanged.
 
 The sums run in another order than torch's (and ``fastmath`` lets LLVM reassociate them), so the numbers agree
 with the eager step up to float32 rounding, not bit for bit: ``compile=off`` stays the reference of every committed
-number (tests/test_compile.py compares gradients). Layouts: the pair views come as P planes, R[p, b, i, j] = o_ij[p]
+number (tests/test_compile.py compares gradients). numba compiles them for the host CPU, and fast-math lets the
+sums' order follow its vector width, so one seed repeats on one machine but not bit for bit across machines of
+other widths (without fast-math the kernels ran 1.5-5x slower, losing what they are for). Layouts: the pair views come as P planes, R[p, b, i, j] = o_ij[p]
 (keys) or T[p, b, i, j] = o_ji[p] (messages, the sender's view), so the innermost loop runs over j contiguously.
 Weight gradients are summed per receiver in float32, then across receivers in float64.
 
