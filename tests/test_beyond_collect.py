@@ -78,9 +78,16 @@ def test_a_control_against_silence_is_rendered_with_its_verdict(tmp_path, monkey
     assert "| silent | 200 rollouts | 150.0 ± 2.0 | 0.00 | 50% |  |" in text
     assert "| b1 | 200 rollouts | 149.0 ± 2.0 | 0.90 | 51% | −1.0 ± 3.0 |" in text
     assert "b1: `random(filter(d <= 1.0, l))`" in text  # the program's rules, not its comment
-    assert "0 of the 1 program-and-length pairs beat silence" in text and "retraining the oracle's weights" in text
+    assert "0 of the 1 program-and-length pairs beat silence" in text
+    assert "closes 50% (200 rollouts) of the gap itself" in text and "is 1.0% of the gap" in text
+    assert "almost all from retraining the oracle's weights" in text
     rows[1]["minus_silent"] = [-5.0, 3.0]
     (tmp_path / "controls/swarm-200-seed1.json").write_text(json.dumps(
         {"seed": 1, "about": "A control.", "tf_full": 100.0, "no_comm": 200.0, "rows": rows}))
-    assert "1 of the 1 program-and-length pairs beat silence retrained as long." in "\n".join(page._control("swarm-200"))
+    again = "\n".join(page._control("swarm-200"))
+    assert "1 of the 1 program-and-length pairs beat silence retrained as long." in again
+    rows[1]["minus_silent"] = [-30.0, 3.0]  # 30 % of the gap: the programs' own gain
+    (tmp_path / "controls/swarm-200-seed1.json").write_text(json.dumps(
+        {"seed": 1, "about": "A control.", "tf_full": 100.0, "no_comm": 200.0, "rows": rows}))
+    assert "retraining the oracle" not in "\n".join(page._control("swarm-200"))
     assert page._control("consensus") == []
