@@ -11,7 +11,7 @@ from neurosym_cli.stages.front_select import about
 
 from .tables import minus
 
-CONTROL_SCRIPT = "swarm_control.py"
+CONTROL_SCRIPT = "silence_control.py"
 """the script that runs and collects the controls (benchmarks/)"""
 
 
@@ -48,12 +48,13 @@ def _why_not_half(v: dict) -> list[str]:
 
 
 def _control(name: str) -> list[str]:
-    """The control of docs/results/beyond/controls/<task>-seed<S>.json (benchmarks/swarm_control.py), if run: the
+    """The control of docs/results/beyond/controls/<task>-seed<S>.json (benchmarks/silence_control.py), if run: the
     oracle retrained under silence against retrained under the front's programs, as long and from the same oracle."""
     out = []
     for path in sorted((OUT / "controls").glob(f"{name}-seed*.json")):
         c = json.loads(path.read_text())
-        out += ["", f"Control, training seed {c['seed']} (`python benchmarks/{CONTROL_SCRIPT}`; "
+        out += ["", f"Control, training seed {c['seed']} (`python benchmarks/{CONTROL_SCRIPT} --tasks {name} "
+                f"--seeds {c['seed']}`; "
                 f"docs/results/beyond/controls/{path.name}): {c['about']} tf-full {c['tf_full']:.1f}, no-comm "
                 f"{c['no_comm']:.1f} (the pipeline's).", "",
                 "| program | retrained for | loss | max in+out | gap closed | − silence (paired) |",
