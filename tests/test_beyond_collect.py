@@ -75,7 +75,7 @@ def test_a_control_against_silence_is_rendered_with_its_verdict(tmp_path, monkey
         {"seed": 1, "about": "A control.", "tf_full": 100.0, "no_comm": 200.0, "rows": rows}))
     monkeypatch.setattr(page, "OUT", tmp_path)
     text = "\n".join(page._control("swarm-200"))
-    assert "| silent | 200 rollouts | 150.0 ± 2.0 | 0.00 | 50% |  |" in text
+    assert "| silent | 200 rollouts | 150.0 ± 2.0 | 0.00 | 50% |  |" in text  # 4 significant digits of tf-full's 100
     assert "| b1 | 200 rollouts | 149.0 ± 2.0 | 0.90 | 51% | −1.0 ± 3.0 |" in text
     assert "b1: `random(filter(d <= 1.0, l))`" in text  # the program's rules, not its comment
     assert "0 of the 1 program-and-length pairs beat silence" in text

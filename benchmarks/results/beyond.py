@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 from benchmarks.beyond_paper import BASELINES, OUT, SEEDS, TASKS, front_reach, verdicts
 
@@ -47,27 +48,35 @@ def _why_not_half(v: dict) -> list[str]:
     return lines
 
 
+def _digits(scale: float) -> int:
+    """Decimals that give a loss of this size four significant digits (700.2, 2.378)."""
+    return max(1, 3 - math.floor(math.log10(abs(scale)))) if scale else 3
+
+
 def _control(name: str) -> list[str]:
-    """The control of docs/results/beyond/controls/<task>-seed<S>.json (benchmarks/silence_control.py), if run: the
+    """The controls of docs/results/beyond/controls/<task>-seed<S>.json (benchmarks/silence_control.py), if run: the
     oracle retrained under silence against retrained under the front's programs, as long and from the same oracle."""
-    out = []
-    for path in sorted((OUT / "controls").glob(f"{name}-seed*.json")):
+    files = sorted((OUT / "controls").glob(f"{name}-seed*.json"))
+    if not files:
+        return []
+    out = ["", f"Control against silence (`python benchmarks/{CONTROL_SCRIPT} --tasks {name}`): "
+           + json.loads(files[0].read_text())["about"] + " Loss: mean ± 95 % t half-width over the 20 test seeds; "
+           "− silence: the program's loss minus silence's retrained as long, paired over the test seeds (negative: "
+           "the program is better)."]
+    for path in files:
         c = json.loads(path.read_text())
-        out += ["", f"Control, training seed {c['seed']} (`python benchmarks/{CONTROL_SCRIPT} --tasks {name} "
-                f"--seeds {c['seed']}`; "
-                f"docs/results/beyond/controls/{path.name}): {c['about']} tf-full {c['tf_full']:.1f}, no-comm "
-                f"{c['no_comm']:.1f} (the pipeline's).", "",
+        k = _digits(c["tf_full"])
+        out += ["", f"Training seed {c['seed']} (docs/results/beyond/controls/{path.name}; the pipeline's tf-full "
+                f"{c['tf_full']:.{k}f}, no-comm {c['no_comm']:.{k}f}):", "",
                 "| program | retrained for | loss | max in+out | gap closed | − silence (paired) |",
                 "|---|---|---|---|---|---|"]
         for r in sorted(c["rows"], key=lambda r: (r["retrain_rollouts"], r["program"] != "silent", r["program"])):
-            vs = _pm(r["minus_silent"], 1) if r["minus_silent"] and r["program"] != "silent" else ""
-            out.append(f"| {r['program']} | {r['retrain_rollouts']} rollouts | {_pm(r['cost'], 1).lstrip('+')} | "
+            vs = _pm(r["minus_silent"], k) if r["minus_silent"] and r["program"] != "silent" else ""
+            out.append(f"| {r['program']} | {r['retrain_rollouts']} rollouts | {_pm(r['cost'], k).lstrip('+')} | "
                        f"{r['max_in_out']:.2f} | {r['gap_closed']:.0%} | {vs} |")
         texts = {r["program"]: "; ".join(ln for ln in r["text"].splitlines() if ln.strip() and not ln.startswith("#"))
                  for r in c["rows"]}
-        out += ["", "The programs: " + "; ".join(f"{k}: `{t}`" for k, t in sorted(texts.items())) + "."]
-        out += ["", "Loss: mean ± 95 % t half-width over the 20 test seeds; − silence: the program's loss minus "
-                "silence's retrained as long, paired over the test seeds (negative: the program is better)."]
+        out += ["", "The programs: " + "; ".join(f"{n}: `{t}`" for n, t in sorted(texts.items())) + "."]
         judged = [r for r in c["rows"] if r["program"] != "silent" and r["minus_silent"]]
         better = [r for r in judged if r["minus_silent"][0] + r["minus_silent"][1] < 0]
         gap = c["no_comm"] - c["tf_full"]
@@ -77,7 +86,7 @@ def _control(name: str) -> list[str]:
             gain = -best["minus_silent"][0] / gap  # the programs' best gain over silence, as a share of the gap
             out += ["", f"{len(better)} of the {len(judged)} program-and-length pairs beat silence retrained as long. "
                     "Silence retrained from the oracle closes " + " and ".join(
-                        f"{v:.0%} ({k} rollouts)" for k, v in sorted(silent.items())) + " of the gap itself"
+                        f"{v:.0%} ({n} rollouts)" for n, v in sorted(silent.items())) + " of the gap itself"
                     + f"; the programs' best gain over it, {best['program']} at {best['retrain_rollouts']} rollouts, "
                     f"is {gain:.1%} of the gap"
                     + (": what the pipeline's prog-retrained gains over its no-comm here comes almost all from "
