@@ -129,14 +129,15 @@ def test_fused_kernels_match_the_torch_round_with_their_own_backward(pair_dim):
 
 
 def test_fused_without_numba_or_off_a_cpu_is_one_line_and_eager(monkeypatch, capsys):
-    from neurosym_cli.tasks import pair_kernels
+    import importlib.util
 
-    monkeypatch.setattr(pair_kernels, "AVAILABLE", False)
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "numba" else real(name, *a))
     assert compiling.configure("fused", "cpu") is False
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "compile=fused" in err[0] and "numba is not installed" in err[0] and "eager" in err[0]
     assert compiling.record()["in_effect"] == "off" and not edge_kernels.serves(torch.zeros(1, 30, 30, 2))
-    monkeypatch.setattr(pair_kernels, "AVAILABLE", True)
+    monkeypatch.setattr(importlib.util, "find_spec", real)
     compiling.configure("fused", "cpu")
     n = edge_kernels.FUSED_FROM
     assert edge_kernels.serves(torch.zeros(1, n, n, 2)) and not edge_kernels.serves(torch.zeros(1, n, n, 2).double())

@@ -12,6 +12,7 @@ compiled step'). Every artifact's ``runtime`` records the mode asked for and the
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import sys
@@ -80,11 +81,8 @@ def _configure_fused(device: str) -> bool:
     where = resolve_device(str(device)).type
     if where != "cpu":
         fall_back(f"the fused kernels run on a CPU, and this run is on {where}")
-    else:
-        from ..tasks.pair_kernels import AVAILABLE
-
-        if not AVAILABLE:
-            fall_back("numba is not installed (pip install numba)")
+    elif importlib.util.find_spec("numba") is None:
+        fall_back("numba is not installed (pip install numba)")
     return False
 
 
