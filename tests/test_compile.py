@@ -311,3 +311,32 @@ def test_fused_kernels_step_aside_for_a_tracer():
     seen = []
     torch.jit.trace(lambda r: seen.append(edge_kernels.serves(r)) or r + 1, (rel,), check_trace=False)
     assert seen == [False]
+
+
+def test_fused_mode_exports_a_policy_with_a_free_team_size():
+    """torch.export with N free under compile=fused: the eager round is traced and N stays symbolic (comparing it
+    with FUSED_FROM before asking for a tracer pinned it: ConstraintViolationError)."""
+    compiling.configure("fused")
+    layer = CommTransformer.for_task(make_task(CrossConfig(name="random-cross"), horizon=2), ModelConfig()).rounds[0]
+
+    class Logits(torch.nn.Module):
+        def forward(self, h, rel):
+            return layer.logits(h, rel)
+
+    n = torch.export.Dim("n", min=2, max=64)
+    for size in (8, 30):  # below and above FUSED_FROM
+        h, rel = torch.randn(1, size, 16), torch.randn(1, size, size, 2)
+        prog = torch.export.export(Logits(), (h, rel), dynamic_shapes=({1: n}, {1: n, 2: n}), strict=False)
+        h2, rel2 = torch.randn(1, 40, 16), torch.randn(1, 40, 40, 2)
+        torch.testing.assert_close(prog.module()(h2, rel2), Logits()(h2, rel2), rtol=1e-4, atol=1e-5)
+
+
+def test_a_numba_that_fails_to_compile_is_one_line_and_the_eager_round(monkeypatch, capsys):
+    compiling.configure("fused")
+    monkeypatch.setattr(edge_kernels, "_WARM", [])
+    monkeypatch.setattr(edge_kernels, "_warm", lambda p: (_ for _ in ()).throw(RuntimeError("LLVM says no\nmore")))
+    n = edge_kernels.FUSED_FROM
+    assert not edge_kernels.serves(torch.zeros(1, n, n, 2))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "did not compile (RuntimeError: LLVM says no)" in err[0] and "eager" in err[0]
+    assert compiling.record()["in_effect"] == "off"

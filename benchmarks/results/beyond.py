@@ -60,7 +60,7 @@ def _control(name: str) -> list[str]:
     if not files:
         return []
     out = ["", f"Control against silence (`python benchmarks/{CONTROL_SCRIPT} --tasks {name}`): "
-           + json.loads(files[0].read_text())["about"] + " Loss: mean ± 95 % t half-width over the 20 test seeds; "
+           + json.loads(files[0].read_text())["about"] + " Loss: mean ± 95 % t half-width over the test seeds; "
            "− silence: the program's loss minus silence's retrained as long, paired over the test seeds (negative: "
            "the program is better)."]
     for path in files:

@@ -13,9 +13,10 @@ The sums run in another order than torch's (and ``fastmath`` lets LLVM reassocia
 with the eager step up to float32 rounding, not bit for bit: ``compile=off`` stays the reference of every committed
 number (tests/test_compile.py compares gradients). numba compiles them for the host CPU, and fast-math lets the
 sums' order follow its vector width, so one seed repeats on one machine but not bit for bit across machines of
-other widths (without fast-math the kernels ran 1.5-5x slower, losing what they are for). Layouts: the pair views come as P planes, R[p, b, i, j] = o_ij[p]
-(keys) or T[p, b, i, j] = o_ji[p] (messages, the sender's view), so the innermost loop runs over j contiguously.
-Weight gradients are summed per receiver in float32, then across receivers in float64.
+other widths (without fast-math the kernels ran 1.5-5x slower, losing what they are for). Layouts: the pair views
+come as P planes, R[p, b, i, j] = o_ij[p] (keys) or T[p, b, i, j] = o_ji[p] (messages, the sender's view), so the
+innermost loop runs over j contiguously. Weight gradients are summed per receiver in float32, then across receivers
+in float64.
 
 Shapes: B episodes, N agents, D model width, P the task's pair width.
 """
@@ -157,11 +158,17 @@ def serves(rel: Tensor) -> bool:
     """Whether the fused kernels serve a dense round over ``rel`` (B, N, N, P): compile=fused in effect, a CPU
     tensor, float32 (numba present: compiling.configure says so when it is not), N >= FUSED_FROM, and no tracer
     (export, torch.compile) recording the round. The first time they do in a process, they are compiled (``_warm``)."""
-    on = (compiling.fused() and rel.device.type == "cpu" and rel.dtype == torch.float32
-          and rel.shape[1] >= FUSED_FROM
-          and not torch.jit.is_tracing() and not torch.compiler.is_compiling())  # an export traces torch ops
+    if not compiling.fused() or not AVAILABLE or torch.jit.is_tracing() or torch.compiler.is_compiling():
+        return False  # a tracer first: under torch.export N is symbolic, and comparing it would pin it
+    on = rel.device.type == "cpu" and rel.dtype == torch.float32 and rel.shape[1] >= FUSED_FROM
     if on and not _WARM:
-        _warm(rel.shape[-1])
+        try:
+            _warm(rel.shape[-1])
+        except Exception as e:  # numba could not compile them here: the eager round, said once
+            said = str(e).strip().splitlines()
+            compiling.fall_back(f"the fused kernels did not compile ({type(e).__name__}"
+                                + (f": {said[0][:160]})" if said else ")"))
+            return False
     return on
 
 

@@ -189,8 +189,11 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             made = make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
-    if cfg.plots:  # the table's plot, the training curves and the figures, to the trackers that keep files
-        track_files(cfg, [RunDir(cfg).figure2_file, RunDir(cfg).curves_file, *map(Path, made.values())])
+    try:  # the table's plot, the training curves and the figures, to the trackers that keep files
+        if cfg.plots:
+            track_files(cfg, [RunDir(cfg).figure2_file, RunDir(cfg).curves_file, *map(Path, made.values())])
+    except UserError as e:  # the pipeline's work is done and on disk: a tracker's failure is a warning here
+        log.warning("figures not sent to the trackers: %s", e)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
         f"seed {cfg.seed}) in {clock(time.perf_counter() - t0)}")
     return results

@@ -83,6 +83,11 @@ def _configure_fused(device: str) -> bool:
         fall_back(f"the fused kernels run on a CPU, and this run is on {where}")
     elif importlib.util.find_spec("numba") is None:
         fall_back("numba is not installed (pip install numba)")
+    else:
+        try:  # installed is not importable (a numpy it does not support, ...)
+            import numba  # noqa: F401
+        except Exception as e:
+            fall_back(f"numba cannot be imported ({type(e).__name__}: {str(e).strip()[:160]})")
     return False
 
 

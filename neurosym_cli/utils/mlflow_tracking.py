@@ -120,7 +120,8 @@ class MLflowTracker(Tracker):
         from mlflow.entities import ViewType
 
         found = self.client.search_runs([exp], filter_string=f"tags.`{GROUP}` = '{run.group}'",
-                                        run_view_type=ViewType.ACTIVE_ONLY, max_results=1)
+                                        run_view_type=ViewType.ACTIVE_ONLY, max_results=1,
+                                        order_by=["attributes.start_time ASC"])  # two made at once: all take the first
         if found:
             return found[0].info.run_id
         made = self.client.create_run(exp, run_name=run.group, tags={
