@@ -31,6 +31,7 @@ from benchmarks.beyond_paper import OUT, SEEDS, TASKS, exp_dir, run_args  # noqa
 from benchmarks.run_seeds import PIN, neurosym, write_result  # noqa: E402
 
 from neurosym_cli.stats import mean_ci  # noqa: E402
+from neurosym_cli.utils.io import write_text  # noqa: E402
 
 RUNS = ROOT / "outputs" / "beyond"
 """the pipeline runs (benchmarks/beyond_paper.py's runs root)"""
@@ -60,8 +61,7 @@ def root(name: str, seed: int, rollouts: int) -> Path:
 def program_file(name: str, seed: int, program: str, text: str) -> Path:
     path = CONTROLS / f"{name}-seed{seed}" / "programs" / f"{program}.txt"
     if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
+        write_text(path, text)  # atomically: a run killed here leaves no half program
     return path
 
 

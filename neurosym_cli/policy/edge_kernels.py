@@ -204,41 +204,36 @@ def _weight_grads(gw: np.ndarray, gb: np.ndarray, like: Tensor) -> tuple[Tensor,
     return torch.from_numpy(gw).t().to(like.dtype), torch.from_numpy(gb).to(like.dtype)
 
 
-class _KeyLogits(torch.autograd.Function):
+class _PairPass(torch.autograd.Function):
+    """One pass over the pairs, keys' or messages': (x, rel, W, b, sender) -> out, with x the scaled queries (keys'
+    logits, planes of o_ij) or the round's weights (messages, planes of the sender's view o_ji)."""
+
     @staticmethod
-    def forward(ctx, q: Tensor, rel: Tensor, weight: Tensor, bias: Tensor) -> Tensor:  # type: ignore[override]
-        R, wt = _planes(rel, sender=False), weight.detach().t().contiguous()
-        ctx.save_for_backward(q, R, wt, bias)
-        return torch.from_numpy(_logits_fwd(_np(q), R.numpy(), wt.numpy(), _np(bias)))
+    def forward(ctx, x: Tensor, rel: Tensor, weight: Tensor, bias: Tensor,  # type: ignore[override]
+                sender: bool) -> Tensor:
+        planes, wt = _planes(rel, sender), weight.detach().t().contiguous()
+        ctx.sender = sender
+        ctx.save_for_backward(x, planes, wt, bias)
+        fwd = _messages_fwd if sender else _logits_fwd
+        return torch.from_numpy(fwd(_np(x), planes.numpy(), wt.numpy(), _np(bias)))
 
     @staticmethod
     def backward(ctx, g: Tensor):  # type: ignore[override]
-        q, R, wt, bias = ctx.saved_tensors
-        gq, gR, gw, gb = _logits_bwd(_np(g), _np(q), R.numpy(), wt.numpy(), _np(bias))
-        return (torch.from_numpy(gq), torch.from_numpy(gR).permute(1, 2, 3, 0), *_weight_grads(gw, gb, wt))
-
-
-class _EdgeMessages(torch.autograd.Function):
-    @staticmethod
-    def forward(ctx, w: Tensor, rel: Tensor, weight: Tensor, bias: Tensor) -> Tensor:  # type: ignore[override]
-        T, wt = _planes(rel, sender=True), weight.detach().t().contiguous()
-        ctx.save_for_backward(w, T, wt, bias)
-        return torch.from_numpy(_messages_fwd(_np(w), T.numpy(), wt.numpy(), _np(bias)))
-
-    @staticmethod
-    def backward(ctx, g: Tensor):  # type: ignore[override]
-        w, T, wt, bias = ctx.saved_tensors
-        gwt, gT, gw, gb = _messages_bwd(_np(g), _np(w), T.numpy(), wt.numpy(), _np(bias))
-        # T[p, b, i, j] is o_ji: its gradient goes back to rel[b, j, i, p]
-        return (torch.from_numpy(gwt), torch.from_numpy(gT).permute(1, 3, 2, 0), *_weight_grads(gw, gb, wt))
+        x, planes, wt, bias = ctx.saved_tensors
+        bwd = _messages_bwd if ctx.sender else _logits_bwd
+        gx, gp, gw, gb = bwd(_np(g), _np(x), planes.numpy(), wt.numpy(), _np(bias))
+        # planes[p, b, i, j] is o_ij, or o_ji for the sender's view: its gradient goes back to rel[b, i, j, p] or
+        # rel[b, j, i, p]
+        back = (1, 3, 2, 0) if ctx.sender else (1, 2, 3, 0)
+        return torch.from_numpy(gx), torch.from_numpy(gp).permute(*back), *_weight_grads(gw, gb, wt), None
 
 
 def key_logits(q: Tensor, rel: Tensor, key_edge: nn.Linear) -> Tensor:
     """l_ij = <q_i, ReLU(W_k o_ij + b_k)>: q (B, N, D) scaled queries, rel (B, N, N, P) -> (B, N, N)."""
-    return _KeyLogits.apply(q, rel, key_edge.weight, key_edge.bias)
+    return _PairPass.apply(q, rel, key_edge.weight, key_edge.bias, False)
 
 
 def edge_messages(w: Tensor, rel: Tensor, msg_edge: nn.Linear) -> Tensor:
     """sum_j w_ij ReLU(W_m o_ji + b_m): w (B, N, N) the round's weights (after dropout), rel (B, N, N, P) ->
     (B, N, D)."""
-    return _EdgeMessages.apply(w, rel, msg_edge.weight, msg_edge.bias)
+    return _PairPass.apply(w, rel, msg_edge.weight, msg_edge.bias, True)
