@@ -77,8 +77,9 @@ def test_the_cli_refuses_a_team_that_cannot_fit_before_allocating(tmp_path):
 
 
 MEMORY_PROBE = """
-import resource, sys, torch
+import sys
 import neurosym_cli
+import torch
 from neurosym_cli.config import ModelConfig
 from neurosym_cli.dsl.parser import parse
 from neurosym_cli.policy.comm import ProgramComm
@@ -87,16 +88,24 @@ from neurosym_cli.rollout import rollout
 from neurosym_cli.tasks.base import Rng
 from neurosym_cli.tasks.swarm import SwarmConfig, SwarmTask
 torch.set_num_threads(1)
+
+
+def high_water_kib():
+    # VmHWM belongs to this address space; ru_maxrss would carry over the parent's peak through fork + exec
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+
+
 env = SwarmTask(SwarmConfig(name="swarm", agents_per_group=500))
 policy = CommTransformer.for_task(env, ModelConfig()).eval()
 comm = ProgramComm(parse("argmax(map(-1.0*d, filter(theta >= -1.85, l)))\\nrandom(filter(d >= 3.6, l))"),
                    env.features("v1"))
 state = env.reset(1, torch.Generator().manual_seed(0))[0]
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+before = high_water_kib()
 with torch.no_grad():
     traj = rollout(env, policy, comm, state, Rng([torch.Generator().manual_seed(1)]), 3)
 assert traj.max_in.max() == 2
-print(before, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+print(before, high_water_kib())
 """
 
 
