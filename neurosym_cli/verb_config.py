@@ -187,8 +187,13 @@ class PipelineConfig:
     difference is at most this share of the best's mean loss (an equivalence test, scale-free: the same on every
     task); null: the paper's test (the interval contains 0), which let a noisy program 6 % worse pass at 10
     validation seeds"""
+    jobs: int = 0
+    """stages run at once as the stage graph allows, each in its own process with ``threads`` threads (a stage
+    seeds itself: the numbers are the same at any value); 0: one per CPU core this process may use over
+    ``threads`` (1 on a GPU or with threads=0); 1: one after the other in this process"""
 
     def __post_init__(self) -> None:
+        _check(self.jobs >= 0, f"pipeline.jobs must be non-negative (0 = one per core), got {self.jobs}")
         _check(self.select in PIPELINE_SELECT, f"pipeline.select must be one of {', '.join(PIPELINE_SELECT)}, "
                f"got {self.select!r}")
         _check(self.margin is None or 0 <= self.margin < 1,

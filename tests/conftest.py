@@ -16,6 +16,9 @@ ROOT = Path(__file__).resolve().parents[1]
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ["OMP_NUM_THREADS"] = "1"
 torch.set_num_threads(int(os.environ.get("OMP_NUM_THREADS", max(1, min(2, os.cpu_count() or 1)))))
+# A pipeline runs its stages one after the other in its own process here (the cores are the test workers'; a worker
+# process per stage would cost an import of torch each): tests of pipeline.jobs > 1 say so (tests/test_flow.py).
+os.environ.setdefault("NEUROSYM_PIPELINE_JOBS", "1")
 
 
 @pytest.fixture

@@ -6,7 +6,8 @@ of these and print; ``neurosym pipeline`` calls them in the order of the stage g
     evaluate.py  the evaluation protocol for one baseline, written to eval/<label>/metrics.json (section 4)
     results.py   read every evaluation of a run directory (or of many training seeds) back, in the paper's order
     comm.py      the communication provider of a baseline, with its program or tree loaded
-    pipeline.py  every stage the listed baselines need, in dependency order
+    pipeline.py  every stage the listed baselines need, in dependency order, pipeline.jobs at once
+    flow.py      the scheduler under it: a dependency graph of jobs, run in worker processes or in this one
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .. import __version__
-from ..baselines import ORACLE, Stage, run_args
+from ..baselines import ORACLE, run_args
 from ..config import RunConfig, UserError
 from ..dsl.ast import Program
 from ..dsl.files import save_program
@@ -39,6 +39,7 @@ from ..schemes import get
 from ..stats import mean_ci
 from ..utils.console import clock, log, say
 from ..utils.io import read_json, write_json
+from .flow import Flow, Job
 from .front import read_front
 from .guard import SILENT, communication_helps
 from .validation import choose, validate
@@ -56,10 +57,6 @@ RULE = ("retrained under each distinct program of the front, validated on budget
         "silent programs are no candidates when tf-full beats no-comm on validation (paired 95% interval of "
         "no-comm - tf-full above 0)")
 """the rule, as the choice file states it"""
-
-RunStage = Callable[..., Any]
-"""runs one pipeline stage: ``run(stage, program="")`` (stages/pipeline.py), reusing what exists"""
-
 
 # --------------------------------------------------------------------------------------------- the rule
 def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = None) -> list[dict[str, Any]]:
@@ -162,26 +159,28 @@ def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
 
 
 # --------------------------------------------------------------------------------------------- the stage
-def _val(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, Any]:
+def validation(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, Any]:
+    """``baseline``'s validation rows (stages/validation.py), under ``program`` (a file; "" for none)."""
     return validate(dataclasses.replace(cfg, baseline=get(baseline), cmd="eval", program=program))
 
 
-def select_front(cfg: RunConfig, run: RunStage) -> Path:
-    """Steps 1-5 of the module docstring; returns the picked program's file. ``run(stage, program="")`` runs one
-    pipeline stage (stages/pipeline.py), reusing what exists."""
+def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Callable[[str, str], Job],
+                 on_candidates: Callable[[list[str]], None] | None = None) -> Flow:
+    """Steps 2-5 of the module docstring, as a flow (stages/flow.py) that starts once step 1's artifacts are made;
+    its value is the picked program's file. ``retrain(program)``: the job that retrains prog-retrained under a
+    program file (the pipeline's stage); ``validate_job(baseline, program)``: the job of ``validation``;
+    ``on_candidates``: told the program files about to be retrained (the pipeline's time left)."""
     t0 = time.perf_counter()
     search = dataclasses.replace(cfg, baseline=get(SEARCH), program="")
     rd = RunDir(search)
     tag = rd.program_tag
-    for stage in (Stage("train", ORACLE), Stage("synth", SEARCH), Stage("train", SILENT_BASELINE)):
-        run(stage)
     remake = f"neurosym synth {run_args(cfg)} synth.front=true overwrite=true"
     front = read_front(rd.front_file, remake)
     if any("range" not in r for r in front["rounds"]):
         log.warning(f"the front {rd.front_file} was searched before its sparse end offered the nearest agent within a "
                     f"radius (issue 37): `{remake}` searches it again with them")
     cands = candidates(front)
-    tf, nc = _val(cfg, ORACLE), _val(cfg, SILENT_BASELINE)
+    tf, nc = yield [validate_job(ORACLE, ""), validate_job(SILENT_BASELINE, "")]
     helps, gap, gap_ci = communication_helps(tf["loss"], nc["loss"])
     near = sum(c["name"].startswith("near") for c in cands)
     say(f"front selection {cfg.task.name} ({tag}): {len(cands) - near} distinct program(s) of "
@@ -194,15 +193,18 @@ def select_front(cfg: RunConfig, run: RunStage) -> Path:
         if talking and len(talking) < len(cands):
             say(f"front: {len(cands) - len(talking)} program(s) silent on D left out (communication helps)")
             cands = talking
-    rows = []
-    for k, cand in enumerate(cands, start=1):
-        path = rd.front_candidate_file(tag, cand["name"])
+    paths = [rd.front_candidate_file(tag, c["name"]) for c in cands]
+    for k, (cand, path) in enumerate(zip(cands, paths), start=1):
         write_candidate(path, cand, tag)
         say(f"front {k}/{len(cands)}: {about(cand)} (max in+out on D "
             + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + f"): retraining ({clock(time.perf_counter() - t0)} "
             "elapsed)")
-        run(Stage("retrain", RETRAINED), program=str(path))
-        v = _val(cfg, RETRAINED, str(path))
+    if on_candidates is not None:
+        on_candidates([str(p) for p in paths])
+    yield [retrain(str(p)) for p in paths]
+    vals = yield [validate_job(RETRAINED, str(p)) for p in paths]
+    rows = []
+    for k, (cand, path, v) in enumerate(zip(cands, paths, vals), start=1):
         m, h = mean_ci(v["loss"])
         say(f"front {k}/{len(cands)}: {about(cand)}: validation loss {m:.4g} ± {h:.3g}, max in+out "
             f"{v['degree']:.2f}")

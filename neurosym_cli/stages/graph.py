@@ -1,8 +1,8 @@
 """The stage graph: which commands make the artifacts a baseline needs, and what each of them waits for.
 
 Asked of the schemes alone (``schemes.SCHEMES``: each answers its upstream stages and what its own stages wait
-for), stdlib only. ``neurosym pipeline`` runs a plan in order; ``benchmarks/run_paper.py`` schedules the same
-stages over several workers.
+for), stdlib only. ``neurosym pipeline`` runs a plan's stages as their waits allow, pipeline.jobs at once
+(stages/flow.py); ``benchmarks/run_paper.py`` schedules the stages of several tasks over its workers.
 """
 
 from __future__ import annotations

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import os
 import time
 from pathlib import Path
+from typing import Any
 
 from ..baselines import ORACLE
 from ..schemes import with_run
@@ -17,8 +19,10 @@ from ..utils.console import clock, left_text, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
-from .front_select import FRONT_RUNS
-from .graph import Stage, plan
+from .flow import Flow, Job, Node, one, run_flow
+from .front_select import FRONT_RUNS, RETRAINED, validation
+from .graph import Stage, plan, requires
+from .jobs import quiet_job
 from .results import print_table
 from .synth import synthesize
 from .tracked import track_files
@@ -113,8 +117,56 @@ def _trained_seconds(history: Path) -> float:
         return 0.0
 
 
+@dataclasses.dataclass(frozen=True)
+class StageRun:
+    """What one stage's job hands back to the pipeline: its ``verb``, key in pipeline_timings.json (``name``), work
+    (stage_units), wall time (s) and the stage's own result."""
+
+    verb: str
+    name: str
+    units: float
+    took: float
+    result: Any
+
+
+def run_stage(cfg: RunConfig, info: RunInfo, stage: Stage, program: str = "") -> StageRun:
+    """One stage on the pipeline's config (``program``: a program baseline's file), timed: a pipeline's job, in its
+    process or a worker's."""
+    stage_cfg, stage_info = stage_config(cfg, info, stage, program)
+    # stages print no intermediate tables or live views' final renders; the pipeline prints the final table
+    stage_info.multirun = info.multirun or stage.verb == "eval"
+    units = stage_units(stage_cfg, stage)
+    start = time.perf_counter()
+    result = RUNNERS[stage.verb](stage_cfg, stage_info)
+    took = time.perf_counter() - start
+    if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
+        took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
+    return StageRun(stage.verb, timing_name(stage, stage_cfg), units, took, result)
+
+
+def pipeline_jobs(cfg: RunConfig) -> int:
+    """Stages at once: pipeline.jobs, or (0) one per CPU core this process may use over ``threads`` each; one on a
+    GPU (one device) or with threads=0 (every core for one stage)."""
+    if cfg.pipeline.jobs:
+        return cfg.pipeline.jobs
+    from ..utils.device import resolve_device
+
+    if cfg.threads == 0 or resolve_device(cfg.device).type != "cpu":
+        return 1
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, cores // cfg.threads)
+
+
+FRONT = "front selection"
+"""the key of the front selection's node in the pipeline's graph"""
+CANDIDATES_GUESS = 4
+"""front candidates assumed by the time left before the front is read and no earlier run timed them (a two-rule
+front's distinct programs and nearest-within-r ones: 3 to 6 on the main job's seeds)"""
+
+
 def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
-    """Run the plan of ``cfg.baselines``; keep each stage's wall time in pipeline_timings.json; print the table."""
+    """Run the plan of ``cfg.baselines``, pipeline.jobs stages at once as the stage graph allows (stages/flow.py);
+    keep each stage's wall time in pipeline_timings.json; print the table."""
     if cfg.selected:  # the paper's protocol with model selection: the pick's rules, lam, features
         from .select import apply_selected, run_selection, selected_file
 
@@ -126,72 +178,130 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     stages = plan(cfg.baselines)
     if cfg.program:  # a hand-written program: prog and prog-retrained run under it, nothing is searched for them
         stages = [s for s in stages if s != Stage("synth", "prog")]
-    results = {}
+        say(f"pipeline: prog and prog-retrained run under program={cfg.program}")
+    front = not cfg.program and cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines)
+    if not cfg.program and cfg.pipeline.select == "front" and not front:
+        log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
+                    "program; the front is not chosen among")
+    if front:  # what the front selection needs, first (its retrainings are the longest chain) whether or not listed
+        from .front_select import SEARCH, SILENT_BASELINE
+
+        first = [Stage("train", ORACLE), Stage("train", SILENT_BASELINE), Stage("synth", SEARCH)]
+        stages = first + [s for s in stages if s not in first]
+    jobs = min(pipeline_jobs(cfg), len(stages))
+    job_cfg, job_info = quiet_job(cfg, info) if jobs > 1 else (cfg, info)  # workers: plain lines, no tables
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = RunDir(cfg).timings_file
     timings = read_json(timing_file, pipeline_command(cfg), lambda t: isinstance(t, dict) and all(
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
     pace = PipelineClock()
+    chosen = {"program": cfg.program}  # the program prog and prog-retrained run under, once known
+    made: set[str] = set()  # timing names of the stages that ran in this pipeline
+    started: dict[str, float] = {}  # stage name -> when it started
+    candidates: list[str] = []  # the front's program files, once it is read
 
-    def run(stage: Stage, program: str = "") -> dict:
-        """One stage on the pipeline's config (``program``: a program baseline's file), its wall time kept."""
-        stage_cfg, stage_info = stage_config(cfg, info, stage, program)
-        # stages print no intermediate tables or live views' final renders; the pipeline prints the final table
-        stage_info.multirun = info.multirun or stage.verb == "eval"
-        units = stage_units(stage_cfg, stage)
-        start = time.perf_counter()
-        result = RUNNERS[stage.verb](stage_cfg, stage_info)
-        took = time.perf_counter() - start
-        pace.done(stage.verb, units, took)
-        if stage.verb in ("train", "retrain"):  # the optimizer steps' own clock survives interruptions and resumes
-            took = max(took, _trained_seconds(RunDir(stage_cfg).history_file))
-        # a reused artifact takes ~0 s: keep the time it took to make (evaluation always reruns)
-        name = timing_name(stage, stage_cfg)
-        timings[name] = round(took if stage.verb == "eval" else max(took, timings.get(name, 0.0)), 1)
-        write_json(timing_file, timings)
-        return result
+    def record(out: Any) -> None:
+        """A job's result, in this process: a stage's pace and wall time (a reused artifact takes ~0 s: keep the time
+        it took to make; an evaluation always reruns)."""
+        if isinstance(out, StageRun):
+            pace.done(out.verb, out.units, out.took)
+            made.add(out.name)
+            timings[out.name] = round(out.took if out.verb == "eval" else max(out.took, timings.get(out.name, 0.0)),
+                                      1)
+            write_json(timing_file, timings)
 
-    chosen = cfg.program  # program=: the user's choice, the front is not chosen among
-    if chosen:
-        say(f"pipeline: prog and prog-retrained run under program={chosen}")
-    elif cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines):
-        from .front_select import select_front
-
-        chosen = str(select_front(cfg, run))
-    elif cfg.pipeline.select == "front":
-        log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
-                    "program; the front is not chosen among")
     def program_of(stage: Stage) -> str:
-        return chosen if stage.baseline in FRONT_RUNS else ""
+        return chosen["program"] if stage.baseline in FRONT_RUNS else ""
 
-    def remaining(todo: list[Stage]) -> list[tuple[str, float, float | None]]:
+    def retrain_job(program: str) -> Job:
+        return Job(run_stage, (job_cfg, job_info, Stage("retrain", RETRAINED), program), f"retrain {Path(program).stem}")
+
+    def validate_job(baseline: str, program: str) -> Job:
+        return Job(validation, (job_cfg, baseline, program), f"validate {baseline}")
+
+    def remaining() -> list[float | None]:
+        """Seconds of each piece of work not done (None: not known yet): stages not started, the running ones less
+        their time so far, the front's retrainings."""
         out = []
-        for s in todo:
+        for s in stages:
+            if s.name in done_names:
+                continue
             c = stage_config(cfg, info, s, program_of(s))[0]
-            out.append((s.verb, stage_units(c, s), timings.get(timing_name(s, c))))
+            est = pace.left([(s.verb, stage_units(c, s), timings.get(timing_name(s, c)))])
+            if s.name in started and est is not None:  # running: what is left of it
+                est = max(0.0, est - (time.perf_counter() - started[s.name]))
+            out.append(est)
+        if front and FRONT not in done_names:
+            stage = Stage("retrain", RETRAINED)
+            guess = sum(k.startswith(stage.name + " ") for k in timings) or CANDIDATES_GUESS
+            for f in candidates or [""] * guess:
+                c = stage_config(cfg, info, stage, f)[0]
+                if not f or timing_name(stage, c) not in made:
+                    out.append(pace.left([("retrain", stage_units(c, stage) if f else cfg.budget.retrain_rollouts,
+                                           timings.get(timing_name(stage, c)) if f else None)]))
         return out
 
-    for k, stage in enumerate(stages, start=1):
-        left = pace.left(remaining(stages[k - 1:]))
-        log.info("pipeline stage %d/%d: %s (%s elapsed, %s left%s)", k, len(stages), stage.name,
-                 clock(time.perf_counter() - t0), left_text(left),
-                 "" if left is not None else ": measured once a stage has run")
-        results[f"{stage.verb}:{stage.baseline}"] = run(stage, program_of(stage))
-    print_table(cfg, program=chosen)
+    def left_now() -> float | None:
+        """Seconds left for the pipeline: its remaining work over the jobs at once, and no less than its longest
+        remaining piece."""
+        each = remaining()
+        if any(e is None for e in each):
+            return None
+        return max([sum(each) / jobs, *each]) if each else 0.0
+
+    done_names: set[str] = set()
+    nodes, k = [], iter(range(1, len(stages) + 1))
+
+    def stage_node(stage: Stage) -> Node:
+        def start() -> Flow:
+            started[stage.name] = time.perf_counter()
+            out = yield from one(Job(run_stage, (job_cfg, job_info, stage, program_of(stage)), stage.name))
+            done_names.add(stage.name)
+            return out
+
+        def announce() -> None:
+            left = left_now()
+            log.info("pipeline stage %d/%d: %s (%s elapsed, %s left%s)", next(k), len(stages), stage.name,
+                     clock(time.perf_counter() - t0), left_text(left),
+                     "" if left is not None else ": measured once a stage has run")
+
+        needs = [r.name for r in requires(stage) if r in stages]
+        if front and stage.baseline in FRONT_RUNS and stage.verb != "synth":
+            needs.append(FRONT)
+        holds = str(RunDir(stage_config(cfg, info, stage)[0]).dataset_file) if stage.verb == "synth" else None
+        return Node(stage.name, start, tuple(needs), holds, announce)
+
+    nodes = [stage_node(s) for s in stages]
+    if front:
+        from .front_select import select_front
+
+        def selection() -> Flow:
+            path = yield from select_front(cfg, retrain_job, validate_job, candidates.extend)
+            chosen["program"] = str(path)
+            done_names.add(FRONT)
+            return path
+
+        nodes.insert(len(first), Node(FRONT, selection, tuple(s.name for s in first)))
+    if jobs > 1:
+        say(f"pipeline: {len(stages)} stages, up to {jobs} at once (pipeline.jobs; each its own process and thread)")
+    values = run_flow(nodes, jobs, on_result=record)
+    results = {f"{s.verb}:{s.baseline}": values[s.name].result for s in stages}
+    print_table(cfg, program=chosen["program"])
     from ..config import UserError
     from .render import make_figures
 
-    made: dict[str, str] = {}
+    figures: dict[str, str] = {}
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
         if cfg.plots:  # of the program prog-retrained ran under (the front's pick, under pipeline.select=front)
             log.info("pipeline: the figures (%s elapsed)", clock(time.perf_counter() - t0))
-            made = make_figures(dataclasses.replace(cfg, program=chosen) if chosen else cfg, info)
+            figures = make_figures(dataclasses.replace(cfg, program=chosen["program"]) if chosen["program"] else cfg,
+                                   info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
     try:  # the table's plot, the training curves and the figures, to the trackers that keep files
         if cfg.plots:
-            track_files(cfg, [RunDir(cfg).figure2_file, RunDir(cfg).curves_file, *map(Path, made.values())])
+            track_files(cfg, [RunDir(cfg).figure2_file, RunDir(cfg).curves_file, *map(Path, figures.values())])
     except UserError as e:  # the pipeline's work is done and on disk: a tracker's failure is a warning here
         log.warning("figures not sent to the trackers: %s", e)
     say(f"[green]pipeline done[/]: {len(stages)} stages for {cfg.task.name} ({cfg.budget.name} budget, "
