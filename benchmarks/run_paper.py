@@ -120,7 +120,8 @@ def run_followups(tasks: list[str], logs: Path) -> None:
     todo = [t for t in tasks if t in FOLLOWUPS]
     saved = {t: RunFolder(exp_dir(t)).timings_file.read_text() for t in todo
              if RunFolder(exp_dir(t)).timings_file.exists()}
-    env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    # this script is the scheduler: each pipeline it starts runs its own stages one after the other
+    env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", NEUROSYM_PIPELINE_JOBS="1")
     procs, t0 = {}, time.time()
     for t in todo:
         argv = ["neurosym", "pipeline", f"task={t}", "budget=paper", "threads=1", *PAPER_METHOD, *FOLLOWUPS[t]]
@@ -153,7 +154,8 @@ def main() -> None:
             print(f"{j.priority:7.0f} {j.estimate:6.0f}  {j.name}  <- {', '.join(d.stage for d in j.deps) or '-'}")
         print(f"total estimate {sum(j.estimate for j in jobs) / 60:.0f} core-min")
         return
-    env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    # this script is the scheduler: each pipeline it starts runs its own stages one after the other
+    env = dict(os.environ, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", NEUROSYM_PIPELINE_JOBS="1")
     pending = list(jobs)
     running: dict[subprocess.Popen, tuple[Job, float]] = {}
     start = time.time()

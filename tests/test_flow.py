@@ -1,8 +1,9 @@
-"""The pipeline's scheduler (stages/flow.py): waits, shared resources, batches, errors, worker processes; and the
+"""The pipeline's scheduler (stages/flow.py): waits, batches, errors, worker processes set up as the command; and the
 pipeline run with stages at once gives the numbers of the pipeline run one stage after the other (issue 39)."""
 
 import os
 import time
+from pathlib import Path
 
 import pytest
 
@@ -23,8 +24,30 @@ def fail(message: str) -> None:
     raise UserError(message)
 
 
-def job_node(key: str, log: str, needs=(), holds=None, seconds=0.0) -> Node:
-    return Node(key, lambda: one(Job(stamp, (key, log, seconds), key)), tuple(needs), holds)
+def job_node(key: str, log: str, needs=(), seconds=0.0) -> Node:
+    return Node(key, lambda: one(Job(stamp, (key, log, seconds), key)), tuple(needs))
+
+
+def settings() -> dict:
+    """A job that reports how its process is set up, and logs a line."""
+    import torch
+
+    from neurosym_cli.utils.compiling import in_effect
+    from neurosym_cli.utils.console import log
+    from neurosym_cli.utils.io import confined
+
+    log.info("a line from the job")
+    return {"threads": torch.get_num_threads(), "compile": in_effect(), "roots": [str(r) for r in confined()]}
+
+
+def pid_then_sleep(path: str) -> None:
+    with open(path, "w") as f:
+        f.write(str(os.getpid()))
+    time.sleep(60)
+
+
+def die() -> None:
+    os._exit(3)
 
 
 def test_in_this_process_the_nodes_run_in_order_as_their_waits_allow(tmp_path):
@@ -49,18 +72,73 @@ def test_a_node_of_batches_is_sent_each_batch_and_returns_its_value(tmp_path):
     assert values["b"] == ["x", "y", "after-2"]
 
 
-def test_workers_run_two_at_once_keep_waits_and_never_share_a_held_resource(tmp_path):
+def test_workers_run_two_at_once_and_keep_waits(tmp_path):
     log = str(tmp_path / "log")
     nodes = [job_node("a", log, seconds=1.0), job_node("b", log, seconds=1.0),
-             job_node("c", log, needs=["a"], holds="D", seconds=0.5),
-             job_node("d", log, needs=["a"], holds="D", seconds=0.5)]
+             job_node("c", log, needs=["a"], seconds=0.5), job_node("d", log, needs=["c", "b"])]
     values = run_flow(nodes, 2)
     pids = {v[1] for v in values.values()}
     assert os.getpid() not in pids and len(pids) == 2  # spawned workers, both used
     a, b, c, d = (values[k] for k in "abcd")
     assert a[2] < b[3] and b[2] < a[3]  # a and b overlapped
-    assert min(c[2], d[2]) >= a[3]  # c and d waited for a
-    assert c[2] >= d[3] or d[2] >= c[3]  # and never ran together: both hold D
+    assert c[2] >= a[3] and d[2] >= max(b[3], c[3])  # each waited for what it needs
+
+
+def test_a_worker_is_set_up_as_the_command_is(tmp_path):
+    """threads, compile mode, where it may write, the command's log file and its multirun prefix before the job's."""
+    from neurosym_cli.stages.flow import Worker
+
+    log_file = tmp_path / "pipeline.log"
+    worker = Worker(threads=2, compile="off", roots=(str(tmp_path),), log_file=str(log_file),
+                    log_format="[%(levelname)s] %(message)s", prefix="seed=1")
+    values = run_flow([Node(k, lambda: one(Job(settings, (), "stage x"))) for k in ("p", "q")], 2, worker=worker)
+    assert values["p"] == {"threads": 2, "compile": "off", "roots": [str(tmp_path.resolve())]}
+    assert "[INFO] [seed=1 stage x] a line from the job" in log_file.read_text()
+
+
+def test_a_worker_ends_with_the_process_that_started_it(tmp_path):
+    """kill -9 of the command: its workers do not go on unseen holding their run directories' locks."""
+    import signal
+    import subprocess
+    import sys
+
+    pid_file = tmp_path / "worker.pid"
+    code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+            "from neurosym_cli.stages.flow import Job, Node, one, run_flow\n"
+            "from test_flow import pid_then_sleep\n"
+            "if __name__ == '__main__':\n"
+            f"    run_flow([Node(k, lambda: one(Job(pid_then_sleep, ({str(pid_file)!r},), k))) for k in 'ab'], 2)\n")
+    parent = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        deadline = time.time() + 60
+        while not (pid_file.exists() and pid_file.read_text()) and time.time() < deadline:
+            time.sleep(0.2)
+        worker = int(pid_file.read_text())
+        os.kill(parent.pid, signal.SIGKILL)
+        parent.wait()
+        deadline = time.time() + 10
+        while time.time() < deadline and Path(f"/proc/{worker}").exists() and \
+                "zombie" not in Path(f"/proc/{worker}/status").read_text().lower():
+            time.sleep(0.2)
+        assert not Path(f"/proc/{worker}").exists() or "zombie" in Path(f"/proc/{worker}/status").read_text().lower()
+    finally:
+        parent.kill()
+
+
+def test_a_dead_worker_is_one_line_that_says_how_to_resume():
+    with pytest.raises(UserError, match="a worker process died.*rerun the same command to resume"):
+        run_flow([Node("x", lambda: one(Job(die, (), "x")))], 2)
+
+
+def test_a_stage_waits_for_what_an_absent_stage_waited_for():
+    """program=: prog's search is not run, so prog-retrained's retraining waits for the oracle directly."""
+    from neurosym_cli.stages.graph import Stage
+    from neurosym_cli.stages.pipeline import waits
+
+    stages = [Stage("train", "tf-full"), Stage("retrain", "prog-retrained"), Stage("eval", "prog-retrained")]
+    assert waits(Stage("retrain", "prog-retrained"), stages) == [Stage("train", "tf-full")]
+    assert waits(Stage("eval", "prog-retrained"), stages) == [Stage("train", "tf-full"),
+                                                              Stage("retrain", "prog-retrained")]
 
 
 def test_an_error_in_a_worker_stops_the_flow_with_its_message(tmp_path):

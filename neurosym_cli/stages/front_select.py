@@ -197,8 +197,7 @@ def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Ca
     for k, (cand, path) in enumerate(zip(cands, paths), start=1):
         write_candidate(path, cand, tag)
         say(f"front {k}/{len(cands)}: {about(cand)} (max in+out on D "
-            + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + f"): retraining ({clock(time.perf_counter() - t0)} "
-            "elapsed)")
+            + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + "): queued for retraining")
     if on_candidates is not None:
         on_candidates([str(p) for p in paths])
     yield [retrain(str(p)) for p in paths]

@@ -1,19 +1,17 @@
-"""The process pool of the grid verbs (`neurosym select`, `neurosym rl`): one job per config, ``jobs`` spawned
-processes at once, each with one thread and plain log lines that name its config; a job's UserError comes back
-as a value and stops the grid in one line, a dead worker says how to resume."""
+"""The grids of `neurosym select` and `neurosym rl`: one job per config, ``jobs`` spawned processes at once
+(stages/flow.py), each with one thread and plain log lines that name its config; a job's UserError comes back as a
+value and stops the grid in one line, a dead worker says how to resume."""
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from concurrent.futures.process import BrokenProcessPool
-from multiprocessing import get_context
 from typing import Any, Callable
 
 from ..config import RunConfig, UserError
-from ..utils.console import clock, log
+from ..utils.console import clock, log, set_job_prefix
 from . import RunInfo
+from .flow import Job, Node, Worker, one, run_flow
 
 
 def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
@@ -21,65 +19,41 @@ def quiet_job(cfg: RunConfig, info: RunInfo) -> tuple[RunConfig, RunInfo]:
     return dataclasses.replace(cfg, progress="plain"), RunInfo(True, info.log_dir)
 
 
-def _worker_init() -> None:
-    """A pool worker: one thread, and plain log lines on stdout (a spawned process has no logging set up, so its
-    progress lines would be lost)."""
-    import logging
-    import sys
-
-    import torch
-
-    torch.set_num_threads(1)  # one process per core: intra-op threads would only fight over the cores
-    handler = logging.StreamHandler(sys.stdout)
-    handler.setFormatter(logging.Formatter("[%(asctime)s] %(levelname)s %(message)s", "%H:%M:%S"))
-    root = logging.getLogger()
-    root.handlers[:] = [handler]
-    root.setLevel(logging.INFO)
-
-
 def _job_entry(fn: Callable, cfg: RunConfig, info: RunInfo, name: Callable[[RunConfig], str]) -> dict[str, Any]:
-    """A pool worker's job: its log lines name the grid point; a UserError comes back as a value."""
-    from ..utils.console import set_job_prefix
-
-    set_job_prefix(name(cfg))
+    """A grid job: a UserError comes back as a value that names the grid point."""
     try:
         return fn(cfg, info)
     except UserError as e:
         return {"name": name(cfg), "error": str(e)}
-    finally:
-        set_job_prefix("")
 
 
 def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what: str, *,
              name: Callable[[RunConfig], str]) -> list[dict[str, Any]]:
     """``fn(cfg, info)`` (a module-level function: it is pickled for the workers) for every config, ``jobs``
-    processes at once (1: in this process), results in the given order; ``what`` names a job and ``name`` a config
-    in log lines and errors."""
+    one-thread processes at once (1: in this process; stages/flow.py), results in the given order; ``what`` names a
+    job and ``name`` a config in log lines and errors."""
     t0 = time.perf_counter()
-    results: dict[int, dict[str, Any]] = {}
+    finished = []
 
-    def done(i: int, r: dict[str, Any]) -> None:
-        results[i] = r
+    def done(r: dict[str, Any]) -> None:
+        finished.append(r)
         if "error" in r:
             raise UserError(f"{what} {r['name']}: {r['error']}")
-        log.info("%s %d/%d done: %s (%s elapsed)", what, len(results), len(cfgs), r["name"],
+        log.info("%s %d/%d done: %s (%s elapsed)", what, len(finished), len(cfgs), r["name"],
                  clock(time.perf_counter() - t0))
 
     if jobs <= 1 or len(cfgs) == 1:
-        for i, c in enumerate(cfgs):
-            done(i, _job_entry(fn, c, info, name))
-    else:
-        with ProcessPoolExecutor(min(jobs, len(cfgs)), mp_context=get_context("spawn"),
-                                 initializer=_worker_init) as pool:
-            futures = {pool.submit(_job_entry, fn, c, info, name): i for i, c in enumerate(cfgs)}
+        out = []
+        for c in cfgs:
+            set_job_prefix(name(c))  # the grid point's lines name it here too
             try:
-                for f in as_completed(futures):
-                    done(futures[f], f.result())
-            except BrokenProcessPool as e:  # a worker was killed (out of memory, a signal): finished jobs are kept
-                raise UserError(f"a {what} process died ({e}); what finished is on disk, rerun the same command "
-                                "to resume") from None
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
-    return [results[i] for i in range(len(cfgs))]
+                out.append(_job_entry(fn, c, info, name))
+            finally:
+                set_job_prefix("")
+            done(out[-1])
+        return out
+    # one process per core: intra-op threads would only fight over the cores
+    nodes = [Node(str(i), lambda c=c: one(Job(_job_entry, (fn, c, info, name), name(c)))) for i, c in enumerate(cfgs)]
+    values = run_flow(nodes, min(jobs, len(cfgs)), worker=Worker.like_this_process(cfgs[0], threads=1),
+                      on_result=done)
+    return [values[str(i)] for i in range(len(cfgs))]

@@ -12,19 +12,19 @@ from pathlib import Path
 from typing import Any
 
 from ..baselines import ORACLE
-from ..schemes import with_run
-from ..config import RunConfig
+from ..schemes import get, with_run
+from ..config import RunConfig, UserError
 from ..run import RunDir, pipeline_command
 from ..utils.console import clock, left_text, log, say
 from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
-from .flow import Flow, Job, Node, one, run_flow
-from .front_select import FRONT_RUNS, RETRAINED, validation
+from .flow import Flow, Job, Node, Worker, one, run_flow
+from .front_select import FRONT_RUNS, RETRAINED, SEARCH, SILENT_BASELINE, select_front, validation
 from .graph import Stage, plan, requires
 from .jobs import quiet_job
 from .results import print_table
-from .synth import synthesize
+from .synth import collect_dataset, synthesize
 from .tracked import track_files
 from .train import retrain, train
 
@@ -57,9 +57,8 @@ def stage_units(cfg: RunConfig, stage: Stage) -> float:
     b = cfg.budget
     try:
         run = RunDir(cfg)
-        made = {"train": run.manifest_file, "retrain": run.manifest_file, "synth": run.summary_file}.get(stage.verb)
-        if made is not None and made.exists():
-            return 0.0
+        if stage.verb != "eval" and (run.summary_file if stage.verb == "synth" else run.manifest_file).exists():
+            return 0.0  # (a training has no summary_file: asked only of a search)
     except (UserError, OSError):  # a program file not there yet: the stage will say so; count its work
         pass
     return {"train": b.train_rollouts, "retrain": b.retrain_rollouts, "synth": b.mcmc_steps * cfg.task.rounds,
@@ -164,6 +163,31 @@ CANDIDATES_GUESS = 4
 front's distinct programs and nearest-within-r ones: 3 to 6 on the main job's seeds)"""
 
 
+def dataset_key(path: Path) -> str:
+    """The graph's key of the node that collects the oracle dataset ``path``."""
+    return f"collect D {path.name}"
+
+
+def collect(cfg: RunConfig) -> StageRun:
+    """The oracle dataset D of ``cfg`` (a search's config), collected or found (stages/synth.collect_dataset), as a
+    pipeline job: its searches then start together and reuse it."""
+    start = time.perf_counter()
+    collect_dataset(cfg)
+    path = RunDir(cfg).dataset_file
+    return StageRun("dataset", dataset_key(path), 0.0, time.perf_counter() - start, str(path))
+
+
+def waits(stage: Stage, stages: list[Stage]) -> list[Stage]:
+    """The stages of ``stages`` that ``stage`` waits for: its requirements, and where one is not in the list (a
+    search program= makes unnecessary) what that one waits for, and so on."""
+    out: list[Stage] = []
+    for r in requires(stage):
+        for w in [r] if r in stages else waits(r, stages):
+            if w not in out:
+                out.append(w)
+    return out
+
+
 def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     """Run the plan of ``cfg.baselines``, pipeline.jobs stages at once as the stage graph allows (stages/flow.py);
     keep each stage's wall time in pipeline_timings.json; print the table."""
@@ -183,12 +207,21 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     if not cfg.program and cfg.pipeline.select == "front" and not front:
         log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
                     "program; the front is not chosen among")
-    if front:  # what the front selection needs, first (its retrainings are the longest chain) whether or not listed
-        from .front_select import SEARCH, SILENT_BASELINE
+    first = [Stage("train", ORACLE), Stage("train", SILENT_BASELINE), Stage("synth", SEARCH)] if front else []
+    # what the front selection needs goes first, listed or not: its retrainings are the longest chain
+    stages = first + [s for s in stages if s not in first]
+    search = RunDir(dataclasses.replace(cfg, baseline=get(SEARCH), program=""))  # the front's search
+    chosen = {"program": cfg.program}  # the program prog and prog-retrained run under, once known
 
-        first = [Stage("train", ORACLE), Stage("train", SILENT_BASELINE), Stage("synth", SEARCH)]
-        stages = first + [s for s in stages if s not in first]
-    jobs = min(pipeline_jobs(cfg), len(stages))
+    def program_of(stage: Stage) -> str:
+        return chosen["program"] if stage.baseline in FRONT_RUNS else ""
+
+    # the stages with work left (a finished training or search is reused; an evaluation always reruns, in a
+    # second); under the front, its pick's retraining is one of its candidates', done once it has chosen
+    to_do = [s for s in stages if s.verb != "eval" and not (front and s.baseline in FRONT_RUNS and s.verb != "synth")
+             and stage_units(stage_config(cfg, info, s, program_of(s))[0], s)]
+    chose = not front or search.front_choice_file(search.program_tag).exists()
+    jobs = min(pipeline_jobs(cfg), len(stages)) if to_do or not chose else 1  # nothing to make: no worker started
     job_cfg, job_info = quiet_job(cfg, info) if jobs > 1 else (cfg, info)  # workers: plain lines, no tables
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
     timing_file = RunDir(cfg).timings_file
@@ -196,8 +229,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         isinstance(v, (int, float)) for v in t.values())) if timing_file.exists() else {}
     t0 = time.perf_counter()
     pace = PipelineClock()
-    chosen = {"program": cfg.program}  # the program prog and prog-retrained run under, once known
     made: set[str] = set()  # timing names of the stages that ran in this pipeline
+    done_names: set[str] = set()  # graph keys of the nodes done
     started: dict[str, float] = {}  # stage name -> when it started
     candidates: list[str] = []  # the front's program files, once it is read
 
@@ -210,9 +243,6 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             timings[out.name] = round(out.took if out.verb == "eval" else max(out.took, timings.get(out.name, 0.0)),
                                       1)
             write_json(timing_file, timings)
-
-    def program_of(stage: Stage) -> str:
-        return chosen["program"] if stage.baseline in FRONT_RUNS else ""
 
     def retrain_job(program: str) -> Job:
         return Job(run_stage, (job_cfg, job_info, Stage("retrain", RETRAINED), program), f"retrain {Path(program).stem}")
@@ -234,7 +264,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             out.append(est)
         if front and FRONT not in done_names:
             stage = Stage("retrain", RETRAINED)
-            guess = sum(k.startswith(stage.name + " ") for k in timings) or CANDIDATES_GUESS
+            ours = f"{stage.name} {search.program_tag}-"  # this search's candidates in an earlier run
+            guess = sum(k.startswith(ours) for k in timings) or CANDIDATES_GUESS
             for f in candidates or [""] * guess:
                 c = stage_config(cfg, info, stage, f)[0]
                 if not f or timing_name(stage, c) not in made:
@@ -250,8 +281,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             return None
         return max([sum(each) / jobs, *each]) if each else 0.0
 
-    done_names: set[str] = set()
-    nodes, k = [], iter(range(1, len(stages) + 1))
+    count = iter(range(1, len(stages) + 1))
 
     def stage_node(stage: Stage) -> Node:
         def start() -> Flow:
@@ -262,20 +292,29 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
 
         def announce() -> None:
             left = left_now()
-            log.info("pipeline stage %d/%d: %s (%s elapsed, %s left%s)", next(k), len(stages), stage.name,
+            log.info("pipeline stage %d/%d: %s (%s elapsed, %s left%s)", next(count), len(stages), stage.name,
                      clock(time.perf_counter() - t0), left_text(left),
                      "" if left is not None else ": measured once a stage has run")
 
-        needs = [r.name for r in requires(stage) if r in stages]
+        needs = [w.name for w in waits(stage, stages)]
         if front and stage.baseline in FRONT_RUNS and stage.verb != "synth":
             needs.append(FRONT)
-        holds = str(RunDir(stage_config(cfg, info, stage)[0]).dataset_file) if stage.verb == "synth" else None
-        return Node(stage.name, start, tuple(needs), holds, announce)
+        if stage.verb == "synth":  # its dataset D, collected once for every search of the oracle
+            needs.append(dataset_key(RunDir(stage_config(cfg, info, stage)[0]).dataset_file))
+        return Node(stage.name, start, tuple(needs), announce)
 
     nodes = [stage_node(s) for s in stages]
+    datasets = {}  # one node per dataset D the searches read, waiting for the oracle like them
+    for s in stages:
+        if s.verb == "synth":
+            c = stage_config(job_cfg, job_info, s)[0]
+            key = dataset_key(RunDir(c).dataset_file)
+            if key not in datasets and s in to_do:  # a search left to do (done ones do not read D again)
+                datasets[key] = Node(key, lambda c=c: one(Job(collect, (c,), "collect D")),
+                                     tuple(w.name for w in waits(s, stages)))
+            datasets.setdefault(key, Node(key, lambda: iter(())))  # nothing to collect: done at once
+    nodes[len(first):len(first)] = list(datasets.values())
     if front:
-        from .front_select import select_front
-
         def selection() -> Flow:
             path = yield from select_front(cfg, retrain_job, validate_job, candidates.extend)
             chosen["program"] = str(path)
@@ -285,10 +324,9 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         nodes.insert(len(first), Node(FRONT, selection, tuple(s.name for s in first)))
     if jobs > 1:
         say(f"pipeline: {len(stages)} stages, up to {jobs} at once (pipeline.jobs; each its own process and thread)")
-    values = run_flow(nodes, jobs, on_result=record)
+    values = run_flow(nodes, jobs, worker=Worker.like_this_process(cfg), on_result=record)
     results = {f"{s.verb}:{s.baseline}": values[s.name].result for s in stages}
     print_table(cfg, program=chosen["program"])
-    from ..config import UserError
     from .render import make_figures
 
     figures: dict[str, str] = {}

@@ -38,6 +38,11 @@ class _JobPrefix(logging.Filter):
         return True
 
 
+def current_prefix() -> str:
+    """This job's prefix in a multirun ("" outside one)."""
+    return _job["prefix"]
+
+
 def say(text: str) -> None:
     """A final line of a stage (done, synthesized, ...): on the console, with the job's prefix in a multirun."""
     from rich.markup import escape

@@ -38,6 +38,11 @@ def confine(roots: Sequence[str | Path]) -> None:
     _ROOTS[:] = [Path(r).expanduser().resolve() for r in roots]
 
 
+def confined() -> list[Path]:
+    """The roots this process may write under (``confine``); empty: anywhere."""
+    return list(_ROOTS)
+
+
 def check_inside(path: Path) -> None:
     """Refuse to write ``path`` outside the confined roots (every artifact write and run directory goes through
     here): a name that slipped past the schema's checks must not write elsewhere on the machine."""
