@@ -215,7 +215,8 @@ def main() -> None:
     ap.add_argument("--extra", nargs="*", default=[], help="more overrides (a tiny rehearsal: budget=tiny)")
     ap.add_argument("--verdicts", action="store_true", help="print the verdicts of the result files and stop")
     ap.add_argument("--recollect", action="store_true", help="write the given task-seeds' result files again from "
-                    "their run directories (keeping wall time and machine), where both exist, and run nothing")
+                    "their run directories (keeping wall time and machine), where both exist, or for the first time where "
+                    "a run finished but its collection failed, and run nothing")
     a = ap.parse_args()
     suite = SUITES[a.suite]
     names = a.tasks or list(suite.tasks)
@@ -248,6 +249,18 @@ def main() -> None:
                            "machine": old["machine"]}
                     write_result(dest, res)
                     print(f"{name} seed {seed}: collected again ({'changed' if res != old else 'unchanged'})")
+                elif (exp / "pipeline_timings.json").exists():  # a finished run whose collection failed: its wall
+                    # time is its stages' own (they survive resumes), the machine this one
+                    wall = sum(json.loads((exp / "pipeline_timings.json").read_text()).values())
+                    res = collect(exp, suite.tasks[name], seed, wall, tuple(a.extra), suite)
+                    write_result(dest, res)
+                    print(f"{name} seed {seed}: collected -> {dest}")
+                    part = stash_dir(out, name, seed)
+                    if a.commit:
+                        git_commit(dest, f"{where}: {name} training seed {seed} (issue 37)")
+                        if part.exists():
+                            subprocess.run(["git", "rm", "-r", "-q", "--", str(part)], cwd=ROOT, check=False)
+                            git_commit(part, f"{where}: {name} seed {seed} done; its stash removed")
         return
     out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **PIN}
