@@ -304,12 +304,14 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
         return Node(stage.name, start, tuple(needs), announce)
 
     nodes = [stage_node(s) for s in stages]
-    datasets = {}  # one node per dataset D the searches read, waiting for the oracle like them
+    collecting: set[str] = set()
+    datasets: dict[str, Node] = {}  # one node per dataset D the searches read, waiting for the oracle like them
     for s in stages:
         if s.verb == "synth":
             c = stage_config(job_cfg, job_info, s)[0]
             key = dataset_key(RunDir(c).dataset_file)
-            if key not in datasets and s in to_do:  # a search left to do (done ones do not read D again)
+            if s in to_do and key not in collecting:  # D is read only by searches left to do
+                collecting.add(key)
                 datasets[key] = Node(key, lambda c=c: one(Job(collect, (c,), "collect D")),
                                      tuple(w.name for w in waits(s, stages)))
             datasets.setdefault(key, Node(key, lambda: iter(())))  # nothing to collect: done at once
