@@ -115,7 +115,7 @@ import os
 def job(cfg, info):
     from neurosym_cli.utils.cpu import runtime
 
-    return {"name": str(cfg), "pid": os.getpid(), **runtime()}
+    return {"name": f"seed{cfg.seed}", "pid": os.getpid(), **runtime()}
 """
 
 POOL = """
@@ -124,7 +124,10 @@ from neurosym_cli.stages import RunInfo
 from neurosym_cli.stages.jobs import run_jobs
 import probe
 
-print(json.dumps({"pid": os.getpid(), "rows": run_jobs(probe.job, [0, 1], RunInfo(), 2, "probe", name=str)}))
+from neurosym_cli.api import compose
+
+cfgs = [compose("train", ["task=random-grid", "budget=tiny", f"seed={s}"]) for s in (0, 1)]
+print(json.dumps({"pid": os.getpid(), "rows": run_jobs(probe.job, cfgs, RunInfo(), 2, "probe", name=str)}))
 """
 
 
