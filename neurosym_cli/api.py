@@ -182,9 +182,13 @@ def evaluate(cfg: RunConfig, baseline: str | None = None, verbose: bool = False)
 
 
 def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
-    """Every stage of ``cfg.baselines`` (train, synth, retrain, eval), reusing what exists."""
+    """Every stage of ``cfg.baselines`` (train, synth, retrain, eval), reusing what exists. From Python the stages
+    run in this process unless ``pipeline.jobs`` asks for more (its 0, one per core, means 1 here): worker processes
+    import the calling script again, which must then keep its work under ``if __name__ == "__main__":``."""
     from .stages.pipeline import run_pipeline
 
+    if cfg.pipeline.jobs == 0:
+        cfg = dataclasses.replace(cfg, pipeline=dataclasses.replace(cfg.pipeline, jobs=1))
     with _quiet(verbose):
         return run_pipeline(dataclasses.replace(cfg, cmd="pipeline"), RunInfo(multirun=not verbose))
 

@@ -196,3 +196,23 @@ def test_pipeline_jobs_is_one_per_usable_core_over_threads():
     assert pipeline_jobs(dataclasses.replace(cfg, threads=0)) == 1  # one stage already takes every core
     assert pipeline_jobs(dataclasses.replace(cfg, pipeline=dataclasses.replace(cfg.pipeline, jobs=3))) == 3
     assert compose_config("pipeline", ["task=random-grid"]).pipeline.jobs == int(os.environ["NEUROSYM_PIPELINE_JOBS"])
+
+
+def test_from_a_python_script_the_stages_run_in_its_process_unless_asked(tmp_path):
+    """api.pipeline: pipeline.jobs=0 means 1 from Python (workers import the calling script again); asked for two
+    workers, a script without a main guard gets one line that says so."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "mine.py"
+    script.write_text("from neurosym_cli import api\n"
+                      "cfg = api.compose('pipeline', ['task=random-grid', 'budget=tiny', "
+                      "'baselines=[tf-full]', 'plots=false', *__import__('sys').argv[1:]])\n"
+                      "print(sorted(api.pipeline(cfg)))\n")
+    env = {k: v for k, v in os.environ.items() if k != "NEUROSYM_PIPELINE_JOBS"}
+    p = subprocess.run([sys.executable, str(script), f"runs_root={tmp_path / 'a'}"], capture_output=True, text=True,
+                       env=env, timeout=300)
+    assert p.returncode == 0 and "['eval:tf-full', 'train:tf-full']" in p.stdout, p.stderr
+    p = subprocess.run([sys.executable, str(script), f"runs_root={tmp_path / 'b'}", "pipeline.jobs=2"],
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert p.returncode != 0 and 'if __name__ == "__main__":' in p.stderr and "pipeline.jobs=1" in p.stderr

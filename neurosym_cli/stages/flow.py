@@ -131,6 +131,18 @@ def _call(fn: Callable[..., Any], args: tuple, name: str, prefix: str) -> Any:
         set_job_prefix("")
 
 
+def _script_hint() -> str:
+    """What to say when workers die at once under a Python script: each imports the script again (spawn), and a
+    script that starts its work at the top level fails there."""
+    import sys
+
+    main = getattr(sys.modules.get("__main__"), "__file__", "") or ""
+    if not main or main.endswith(("neurosym", "neurosym.exe", "pytest", "cli.py")):
+        return ""
+    return (f"; called from {main}: keep the script's work under `if __name__ == \"__main__\":` (each worker "
+            "imports the script again), or pass pipeline.jobs=1")
+
+
 class _Running:
     """A started node: its flow, the batch it waits for, the results of that batch so far."""
 
@@ -213,7 +225,7 @@ def run_flow(nodes: Sequence[Node], jobs: int, *, worker: Worker | None = None,
                     result = f.result()
                 except BrokenProcessPool as e:  # a worker was killed (out of memory, a signal)
                     raise UserError(f"a worker process died ({e}); what finished is on disk, rerun the same command "
-                                    "to resume") from None
+                                    f"to resume{_script_hint()}") from None
                 if on_result is not None:
                     on_result(result)
                 r.results[i] = result

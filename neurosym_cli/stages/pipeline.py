@@ -51,14 +51,15 @@ twentieth, an evaluation seed one and a half): what the time left assumes for a 
 def stage_units(cfg: RunConfig, stage: Stage) -> float:
     """The work of one stage of ``cfg``'s plan in its verb's units: training or retraining rollouts, search steps
     (all rounds), evaluation seeds; 0 for a stage whose artifact is there already (a finished training's manifest,
-    a search's summary: it is reused; an evaluation always runs)."""
+    a search's summary: it is reused, unless overwrite=true; an evaluation always runs)."""
     from ..config import UserError
 
     b = cfg.budget
     try:
         run = RunDir(cfg)
-        if stage.verb != "eval" and (run.summary_file if stage.verb == "synth" else run.manifest_file).exists():
-            return 0.0  # (a training has no summary_file: asked only of a search)
+        if not cfg.overwrite and stage.verb != "eval" and \
+                (run.summary_file if stage.verb == "synth" else run.manifest_file).exists():
+            return 0.0  # (a training has no summary_file: asked only of a search); overwrite=true makes it again
     except (UserError, OSError):  # a program file not there yet: the stage will say so; count its work
         pass
     return {"train": b.train_rollouts, "retrain": b.retrain_rollouts, "synth": b.mcmc_steps * cfg.task.rounds,
