@@ -10,11 +10,16 @@ from pathlib import Path
 from benchmarks.beyond_paper import PAPER_TASKS, SUITES
 from neurosym_cli.stages.front_select import about
 
-from .files import PLANNED_SEEDS, SEED_TASKS, load_seeds
+from .files import PLANNED_SEEDS, SEED_TASKS, load_seeds, seed_variant
 from .seed_sections import claim_over_seeds, seed_claims
 from .tables import shown
 
 DEFAULTS = SUITES["paper"].out
+
+
+def trade(runs: list, baseline: str, metric: str) -> float:
+    """``baseline``'s ``metric`` (a test-seed mean) averaged over the training seeds ``runs``."""
+    return sum(seed_variant(r)["baselines"][baseline]["summary"][metric]["mean"] for r in runs) / len(runs)
 
 
 def paper_defaults(directory: Path = DEFAULTS) -> str:
@@ -55,12 +60,24 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
                 "section above (`neurosym select`'s pick, MCMC, the single-λ program). Cells: seeds the claim holds "
                 "on / seeds checked; the claim's quantity, mean ± 95 % t half-width across those seeds.", "",
                 "| claim | paper's method | defaults | lost? |", "|---|---|---|---|"]
+        any_lost = False
         for name in names:
             m = claim_over_seeds(name, {s: v for s, v in per_method.items() if s in seeds}, digits)
             d = claim_over_seeds(name, per_default, digits)
             lost = ("n/a" if not (d["n"] and m["n"]) else "**yes**" if d["k"] / d["n"] < m["k"] / m["n"] else "no")
+            any_lost = any_lost or lost == "**yes**"
             out.append(f"| {d['short']} | {m['k']}/{m['n']}; {m['across']} | {d['k']}/{d['n']}; {d['across']} | "
                        f"{lost} |")
+        if any_lost:  # what the defaults' programs traded: loss and degrees beside the paper method's
+            both = [(label, [r for r in rs if r.seed in seeds]) for label, rs in
+                    (("the defaults", runs), ("the paper's method", method.get(task, [])))]
+            cells = [f"{b} under {label}: loss {trade(rs, b, 'cost'):.{digits}f}, max in+out "
+                     f"{trade(rs, b, 'max_degree'):.2f}, max out {trade(rs, b, 'max_out'):.2f}"
+                     for b in ("prog-retrained", "det-prog-retrained") for label, rs in both if rs]
+            out += ["", "Where a claim is lost, what the programs traded (test means, averaged over the training "
+                    f"seeds both ran, {', '.join(map(str, seeds))}): " + "; ".join(cells) + ". Under the defaults "
+                    "prog-retrained runs the lowest degree of the front whose validation loss is within "
+                    "pipeline.margin of the best candidate's; det-prog is searched by the hybrid search, not MCMC."]
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",
                 *picks, ""]
     return "\n".join(out).rstrip("\n")
