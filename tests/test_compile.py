@@ -340,3 +340,24 @@ def test_a_numba_that_fails_to_compile_is_one_line_and_the_eager_round(monkeypat
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "did not compile (RuntimeError: LLVM says no)" in err[0] and "eager" in err[0]
     assert compiling.record()["in_effect"] == "off"
+
+
+def test_fused_on_teams_below_the_kernels_size_resumes_as_eager(monkeypatch):
+    """compile=fused on a task of at most 10 agents served no round (FUSED_FROM = 24): its checkpoint resumes under
+    compile=off and the other way round; on random-cross (up to 40 agents) the two stay apart."""
+    from neurosym_cli.commands.apps import compose_config
+
+    small = compose_config("train", ["task=unlabeled-goals", "cpu_kernels=avx2"])
+    large = compose_config("train", ["task=random-cross", "cpu_kernels=avx2"])
+    fused = {"runtime": {"compile": {"asked": "fused", "in_effect": "fused"}}}
+    off = {"runtime": {"compile": {"asked": "off", "in_effect": "off"}}}
+    compiling.configure("off")
+    refuse_other_modes(fused, "model.pt", steps=7, cfg=small)
+    with pytest.raises(ConfigError, match="compile=fused, this run has compile=off"):
+        refuse_other_modes(fused, "model.pt", steps=7, cfg=large)
+    monkeypatch.setattr(compiling, "_configure_fused", lambda device: False)  # numba or not: the mode is asked
+    compiling.configure("fused")
+    refuse_other_modes(off, "model.pt", steps=7, cfg=small)
+    with pytest.raises(ConfigError, match="compile=off, this run has compile=fused"):
+        refuse_other_modes(off, "model.pt", steps=7, cfg=large)
+    compiling.configure("off")

@@ -33,10 +33,19 @@ def _at(payload: dict[str, Any], *keys: str) -> Any:
     return payload
 
 
+def _as_stepped(mode: str, cfg: "RunConfig") -> str:
+    """A compile mode as the steps ran it: fused on a task whose teams never reach the kernels' FUSED_FROM agents ran
+    the eager round throughout (the kernels served no round), so it counts as off."""
+    from ..policy.edge_kernels import FUSED_FROM
+
+    most = getattr(cfg.task, "max_agents", None)  # None: a config without its task's schema (Python, tests)
+    return "off" if mode == "fused" and isinstance(most, int) and most < FUSED_FROM else mode
+
+
 def _compiled_now(cfg: "RunConfig") -> str:
     from ..utils.compiling import in_effect
 
-    return in_effect()  # compile=auto is off; on where it compiles; fused where the fused kernels run
+    return _as_stepped(in_effect(), cfg)  # compile=auto is off; on where it compiles; fused where the kernels run
 
 
 @dataclass(frozen=True)
@@ -46,16 +55,18 @@ class ResumeMode:
 
     key: str
     """the setting's name on the command line"""
-    recorded: Callable[[dict[str, Any]], Any]
-    """its value in a checkpoint's payload; None: not recorded (a checkpoint from before the key), any value resumes"""
+    recorded: Callable[[dict[str, Any], "RunConfig"], Any]
+    """its value in a checkpoint's payload (of this run's config); None: not recorded (a checkpoint from before the
+    key), any value resumes"""
     current: Callable[["RunConfig"], Any]
     """its value in this run"""
 
 
 RESUME_MODES = (
-    ResumeMode("cpu_kernels", lambda p: _at(p, "config", "cpu_kernels"), lambda cfg: cfg.cpu_kernels),
+    ResumeMode("cpu_kernels", lambda p, cfg: _at(p, "config", "cpu_kernels"), lambda cfg: cfg.cpu_kernels),
     # the step as it ran (in effect), not as asked; a checkpoint from before the key ran eager
-    ResumeMode("compile", lambda p: _at(p, "runtime", "compile", "in_effect") or "off", _compiled_now),
+    ResumeMode("compile", lambda p, cfg: _as_stepped(_at(p, "runtime", "compile", "in_effect") or "off", cfg),
+               _compiled_now),
 )
 """every setting a resume must keep"""
 
@@ -65,7 +76,7 @@ def refuse_other_modes(payload: dict[str, Any], ckpt: object, *, steps: int, cfg
     from ..errors import ConfigError
 
     for mode in RESUME_MODES:
-        was, now = mode.recorded(payload), mode.current(cfg)
+        was, now = mode.recorded(payload, cfg), mode.current(cfg)
         if was is not None and was != now:
             raise ConfigError(f"{ckpt} was trained for {steps} steps under {mode.key}={was}, this run has "
                               f"{mode.key}={now}: resume it with {mode.key}={was}, or pass overwrite=true to train "
