@@ -111,6 +111,13 @@ def exp_dir(task: Task, seed: int, runs: Path, extra: tuple[str, ...] = ()) -> P
     return Path(api.compose("pipeline", items, config_dir=ROOT / config_dir if config_dir else None).exp_dir)
 
 
+def api_baselines() -> list[str]:
+    """The baselines a pipeline makes by default (every scheme the pipeline runs, in the paper's order)."""
+    from neurosym_cli import api
+
+    return list(api.compose("pipeline", []).baselines)
+
+
 def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, ...] = (),
             suite: Suite = SUITES["beyond"]) -> dict:
     """The small result file of one task-seed: each baseline's evaluation (the label the pipeline ran it under)."""
@@ -249,10 +256,18 @@ def main() -> None:
                            "machine": old["machine"]}
                     write_result(dest, res)
                     print(f"{name} seed {seed}: collected again ({'changed' if res != old else 'unchanged'})")
-                elif (exp / "pipeline_timings.json").exists():  # a finished run whose collection failed: its wall
-                    # time is its stages' own (they survive resumes), the machine this one
+                elif (exp / "pipeline_timings.json").exists():  # a run whose collection failed: its wall time is
+                    # its stages' own (they survive resumes), the machine this one; only once every baseline is in
                     wall = sum(json.loads((exp / "pipeline_timings.json").read_text()).values())
-                    res = collect(exp, suite.tasks[name], seed, wall, tuple(a.extra), suite)
+                    try:
+                        res = collect(exp, suite.tasks[name], seed, wall, tuple(a.extra), suite)
+                    except (OSError, KeyError, ValueError) as e:  # the oracle not trained yet, a file half there
+                        print(f"{name} seed {seed}: not finished ({type(e).__name__}: {e}); nothing written")
+                        continue
+                    want = suite.baselines or api_baselines()
+                    if missing := [b for b in want if b not in res["baselines"]]:
+                        print(f"{name} seed {seed}: not finished ({', '.join(missing)} not evaluated); nothing written")
+                        continue
                     write_result(dest, res)
                     print(f"{name} seed {seed}: collected -> {dest}")
                     part = stash_dir(out, name, seed)

@@ -189,8 +189,9 @@ def pipeline(cfg: RunConfig, verbose: bool = False) -> dict:
 
     if cfg.pipeline.jobs == 0:
         cfg = dataclasses.replace(cfg, pipeline=dataclasses.replace(cfg.pipeline, jobs=1))
+    cfg = dataclasses.replace(_with(cfg, "pipeline", None), progress=cfg.progress)  # threads, compile in effect
     with _quiet(verbose):
-        return run_pipeline(dataclasses.replace(cfg, cmd="pipeline"), RunInfo(multirun=not verbose))
+        return run_pipeline(cfg, RunInfo(multirun=not verbose))
 
 
 def export(cfg: RunConfig, baseline: str | None = None, check: bool = False, verbose: bool = False) -> dict:

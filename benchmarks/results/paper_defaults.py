@@ -68,14 +68,15 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
             any_lost = any_lost or lost == "**yes**"
             out.append(f"| {d['short']} | {m['k']}/{m['n']}; {m['across']} | {d['k']}/{d['n']}; {d['across']} | "
                        f"{lost} |")
-        if any_lost:  # what the defaults' programs traded: loss and degrees beside the paper method's
-            both = [(label, [r for r in rs if r.seed in seeds]) for label, rs in
+        if any_lost and set(seeds) & {r.seed for r in method.get(task, [])}:  # what the programs traded
+            common = sorted(set(seeds) & {r.seed for r in method.get(task, [])})  # the seeds both ran
+            both = [(label, [r for r in rs if r.seed in common]) for label, rs in
                     (("the defaults", runs), ("the paper's method", method.get(task, [])))]
             cells = [f"{b} under {label}: loss {trade(rs, b, 'cost'):.{digits}f}, max in+out "
                      f"{trade(rs, b, 'max_degree'):.2f}, max out {trade(rs, b, 'max_out'):.2f}"
                      for b in ("prog-retrained", "det-prog-retrained") for label, rs in both if rs]
             out += ["", "Where a claim is lost, what the programs traded (test means, averaged over the training "
-                    f"seeds both ran, {', '.join(map(str, seeds))}): " + "; ".join(cells) + ". Under the defaults "
+                    f"seeds both ran, {', '.join(map(str, common))}): " + "; ".join(cells) + ". Under the defaults "
                     "prog-retrained runs the lowest degree of the front whose validation loss is within "
                     "pipeline.margin of the best candidate's; det-prog is searched by the hybrid search, not MCMC."]
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",

@@ -19,6 +19,7 @@ section 15, where the measurements and the estimates stand side by side).
 from __future__ import annotations
 
 from ..config import ModelConfig
+from ..errors import ConfigError
 
 BASE_BYTES = 350 * 2 ** 20
 """the interpreter, torch, numba and the model: the peak of a small run"""
@@ -79,15 +80,14 @@ class DoesNotFit(Exception):
     """Mixed into the ConfigError of a team that cannot fit, so `neurosym stress` can tell it from a missing model."""
 
 
+class TooLarge(ConfigError, DoesNotFit):
+    """A team that does not fit in memory (module level: it crosses from a worker process to the pipeline's)."""
+
+
 def require_fits(what: str, n: int, *, batch: int, horizon: int, rounds: int, model: ModelConfig, k: int,
                  dense: bool, training: bool, sparse_from: int, limit: int | None = None) -> int:
     """The estimate in bytes, or a one-line ConfigError when it exceeds ``limit`` (default: the memory available
     now), naming the estimate and the largest team that fits. ``what`` names the run ('tf-full evaluation')."""
-    from ..errors import ConfigError
-
-    class TooLarge(ConfigError, DoesNotFit):
-        pass
-
     limit = available_bytes() if limit is None else limit
     run = dict(batch=batch, horizon=horizon, rounds=rounds, model=model, k=k, dense=dense, training=training,
                sparse_from=sparse_from)  # everything but the team size

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import signal
+import threading
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
@@ -58,7 +59,8 @@ class Worker:
     """How a worker process is set up: what commands/_run.py sets up in a command's own process. ``threads``: torch
     threads (0: torch's default); ``compile``, ``device``: the step's mode (utils/compiling.py); ``roots``: where it
     may write (utils/io.confine); ``log_file``, ``log_format``, ``log_datefmt``: the command's log file, appended to;
-    ``prefix``: the command's own line prefix in a multirun, before each job's name."""
+    ``prefix``: the command's own line prefix in a multirun, before each job's name; ``levels``: the log levels of
+    the root and neurosym's loggers; ``quiet``: the console muted (the Python API's default)."""
 
     threads: int = 1
     compile: str = "auto"
@@ -68,6 +70,8 @@ class Worker:
     log_format: str = ""
     log_datefmt: str | None = None
     prefix: str = ""
+    levels: tuple[tuple[str, int], ...] = ()
+    quiet: bool = False
 
     @classmethod
     def like_this_process(cls, cfg: RunConfig, *, threads: int | None = None) -> "Worker":
@@ -79,9 +83,12 @@ class Worker:
 
         files = [h for h in logging.getLogger().handlers if isinstance(h, logging.FileHandler)]
         fmt = files[0].formatter if files and files[0].formatter else None
+        from ..utils.console import console, log
+
         return cls(cfg.threads if threads is None else threads, cfg.compile, cfg.device,
                    tuple(str(r) for r in confined()), files[0].baseFilename if files else "",
-                   (fmt._fmt or "") if fmt else "", fmt.datefmt if fmt else None, current_prefix())
+                   (fmt._fmt or "") if fmt else "", fmt.datefmt if fmt else None, current_prefix(),
+                   (("", logging.getLogger().level), (log.name, log.level)), console.quiet)
 
     def __call__(self) -> None:
         """Set up this worker process (the pool's initializer)."""
@@ -107,6 +114,11 @@ class Worker:
         root = logging.getLogger()
         root.handlers[:] = handlers
         root.setLevel(logging.INFO)
+        for name, level in self.levels:  # what this command's console shows (other libraries from WARNING)
+            logging.getLogger(name or None).setLevel(level)
+        from ..utils.console import console
+
+        console.quiet = self.quiet
 
 
 def _die_with_parent() -> None:
@@ -124,9 +136,17 @@ def _call(fn: Callable[..., Any], args: tuple, name: str, prefix: str) -> Any:
     """A job inside a worker: its log lines name it (after the command's own prefix)."""
     from ..utils.console import set_job_prefix
 
+    import pickle
+
     set_job_prefix(f"{prefix} {name}" if prefix else name)
     try:
         return fn(*args)
+    except UserError as e:  # its one line must reach the command's process, whatever class carries it
+        try:
+            pickle.dumps(e)
+        except Exception:
+            raise UserError(str(e)) from None
+        raise
     finally:
         set_job_prefix("")
 
@@ -137,7 +157,7 @@ def _script_hint() -> str:
     import sys
 
     main = getattr(sys.modules.get("__main__"), "__file__", "") or ""
-    if not main or main.endswith(("neurosym", "neurosym.exe", "pytest", "cli.py")):
+    if not main or main.endswith(("neurosym", "neurosym.exe", "pytest", "cli.py", "__main__.py")):
         return ""
     return (f"; called from {main}: keep the script's work under `if __name__ == \"__main__\":` (each worker "
             "imports the script again), or pass pipeline.jobs=1")
@@ -203,11 +223,13 @@ def run_flow(nodes: Sequence[Node], jobs: int, *, worker: Worker | None = None,
                 except BaseException as e:  # noqa: BLE001 - raised where the result is read, as a worker's would be
                     f.set_exception(e)
             else:  # a worker started now inherits Ctrl-C ignored: this process handles it and ends the workers
-                sigint = signal.signal(signal.SIGINT, signal.SIG_IGN)
+                main = threading.current_thread() is threading.main_thread()  # signals are the main thread's
+                sigint = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
                 try:
                     f = pool.submit(_call, job.fn, job.args, job.name, worker.prefix)
                 finally:
-                    signal.signal(signal.SIGINT, sigint)
+                    if main:
+                        signal.signal(signal.SIGINT, sigint)
             futures[f] = (r, i)
 
     try:

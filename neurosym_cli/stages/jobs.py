@@ -9,7 +9,7 @@ import time
 from typing import Any, Callable
 
 from ..config import RunConfig, UserError
-from ..utils.console import clock, log, set_job_prefix
+from ..utils.console import clock, current_prefix, log, set_job_prefix
 from . import RunInfo
 from .flow import Job, Node, Worker, one, run_flow
 
@@ -44,12 +44,13 @@ def run_jobs(fn: Callable, cfgs: list[RunConfig], info: RunInfo, jobs: int, what
 
     if jobs <= 1 or len(cfgs) == 1:
         out = []
+        outer = current_prefix()  # a multirun's own prefix, kept before the grid point's and after the grid
         for c in cfgs:
-            set_job_prefix(name(c))  # the grid point's lines name it here too
+            set_job_prefix(f"{outer} {name(c)}" if outer else name(c))  # the grid point's lines name it here too
             try:
                 out.append(_job_entry(fn, c, info, name))
             finally:
-                set_job_prefix("")
+                set_job_prefix(outer)
             done(out[-1])
         return out
     # one process per core: intra-op threads would only fight over the cores
