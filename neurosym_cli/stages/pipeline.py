@@ -246,7 +246,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             write_json(timing_file, timings)
 
     def retrain_job(program: str) -> Job:
-        return Job(run_stage, (job_cfg, job_info, Stage("retrain", RETRAINED), program), f"retrain {Path(program).stem}")
+        return Job(run_stage, (job_cfg, job_info, Stage("retrain", RETRAINED), program),
+                   f"retrain {Path(program).stem}")
 
     def validate_job(baseline: str, program: str) -> Job:
         return Job(validation, (job_cfg, baseline, program), f"validate {baseline}")
