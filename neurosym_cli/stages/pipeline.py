@@ -1,5 +1,5 @@
-"""`neurosym pipeline`: every stage for every listed baseline of one (task, budget, seed), in the order of the stage
-graph (``graph.plan``), then the results table. Each stage is the same library call as its own command, on the
+"""`neurosym pipeline`: every stage for every listed baseline of one (task, budget, seed), as the stage graph
+(``graph.plan``) allows, pipeline.jobs at once (stages/flow.py), then the results table. Each stage is the same library call as its own command, on the
 pipeline's config with the stage's baseline, so it reuses what exists and resumes what was interrupted."""
 
 from __future__ import annotations
