@@ -52,8 +52,6 @@ def stage_units(cfg: RunConfig, stage: Stage) -> float:
     """The work of one stage of ``cfg``'s plan in its verb's units: training or retraining rollouts, search steps
     (all rounds), evaluation seeds; 0 for a stage whose artifact is there already (a finished training's manifest,
     a search's summary: it is reused, unless overwrite=true; an evaluation always runs)."""
-    from ..config import UserError
-
     b = cfg.budget
     try:
         run = RunDir(cfg)
