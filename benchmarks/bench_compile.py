@@ -164,7 +164,13 @@ def main() -> None:
                     "dense below task.sparse_from = 256 agents) instead of random-cross")
     ap.add_argument("--round", action="store_true", help="one dense round at N = 10 to 200, eager against fused "
                     "(the fused kernels serving at every N), and stop")
+    ap.add_argument("--fused-from", type=int, default=None, help="the team size from which compile=fused's kernels "
+                    "serve a round (default: edge_kernels.FUSED_FROM)")
     args = ap.parse_args()
+    if args.fused_from is not None:
+        from neurosym_cli.policy import edge_kernels
+
+        edge_kernels.FUSED_FROM = args.fused_from
     modes = (args.modes or ("eager,compiled,captured" if args.device == "cuda" else "eager,compiled,fused")).split(",")
     if modes[0] != "eager" or any(m not in MODES for m in modes):
         sys.exit(f"bench_compile: --modes is eager first, then any of {', '.join(MODES)}")

@@ -343,7 +343,7 @@ def test_a_numba_that_fails_to_compile_is_one_line_and_the_eager_round(monkeypat
 
 
 def test_fused_on_teams_below_the_kernels_size_resumes_as_eager(monkeypatch):
-    """compile=fused on a task of at most 10 agents served no round (FUSED_FROM = 24): its checkpoint resumes under
+    """compile=fused on a task of at most 10 agents served no round (FUSED_FROM = 16): its checkpoint resumes under
     compile=off and the other way round; on random-cross (up to 40 agents) the two stay apart."""
     from neurosym_cli.commands.apps import compose_config
 

@@ -20,8 +20,8 @@ from pathlib import Path
 
 CHOICES = {"auto": "the eager step where compiling was not measured faster (today: everywhere)",
            "on": "the step compiled by torch.compile (inductor), eager where it cannot compile",
-           "fused": "the eager step with a dense round's pair work in hand-fused CPU kernels (numba) from 24 agents "
-                    "on: 1.8x training a 200-agent swarm, a few % at the paper's sizes",
+           "fused": "the eager step with a dense round's pair work in hand-fused CPU kernels (numba) from 16 agents "
+                    "on: 1.3x training random-cross, more for larger dense teams",
            "off": "the eager step (every committed number)"}
 """compile values -> what they do"""
 
