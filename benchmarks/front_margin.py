@@ -1,0 +1,121 @@
+"""How the paper's claims under the defaults move with the front selection's margin (issue 37; `pipeline.margin`).
+
+    python benchmarks/front_margin.py                  # every committed paper task-seed under the defaults
+    python benchmarks/front_margin.py --suite beyond   # the tasks beyond the paper (issue 37's four tests)
+    python benchmarks/front_margin.py --json docs/results/front-margin.json
+
+The defaults pick, among the front's programs retrained and validated, the lowest max in+out whose validation loss
+is within ``pipeline.margin`` (0.02) of the validation-best's (stages/front_select.py). Every candidate of a run
+was retrained and validated already, so another margin's pick costs only its test evaluation: for each result file
+of docs/results/seeds-defaults/ (its run directory under outputs/beyond must still be there) this re-applies the
+rule (``front_select.pick``) at each margin to the validation rows the run recorded, evaluates each pick not yet
+evaluated on the test seeds (`neurosym eval ... baseline=prog-retrained program=<candidate>`, a few seconds), and
+checks the paper's claims (benchmarks/results/claims.toml; with ``--suite beyond``, issue 37's four tests of
+benchmarks/beyond_paper.py) with that pick as prog-retrained, every other baseline as the run made it. Nothing is retrained; the test seeds serve only to report, never to choose.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+from benchmarks.beyond_paper import SUITES, verdict  # noqa: E402
+from benchmarks.results.claims import claims  # noqa: E402
+from benchmarks.results.files import METRICS, load_seeds, seed_variant  # noqa: E402
+from neurosym_cli.stages.front_select import pick  # noqa: E402
+
+MARGINS = (0.02, 0.01, 0.005, 0.0, None)
+"""pipeline.margin values tried (0.02: the default; None: the paper's test, similar when the interval holds 0)"""
+
+
+def test_rows(cfg: dict, cand: dict) -> list[dict]:
+    """A candidate's per-seed test rows, evaluated now if the run has not (its retrained model is reused)."""
+    path = Path(cfg["exp_dir"]) / "eval" / cand["label"] / "metrics.json"
+    if not path.exists():
+        cmd = [str(Path(sys.executable).parent / "neurosym"), "eval", f"task={cfg['task']['name']}",
+               f"budget={cfg['budget']['name']}", f"seed={cfg['seed']}", "baseline=prog-retrained",
+               f"program={cand['program_file']}", f"runs_root={cfg['runs_root']}", "threads=1", "plots=false",
+               "progress=plain"]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode != 0 or not path.exists():
+            sys.exit(f"front_margin: evaluating {cand['label']} failed: {p.stderr.strip()[-300:]}")
+    return json.loads(path.read_text())["per_seed"]
+
+
+def as_baseline(label: str, rows: list[dict]) -> dict:
+    """Per-seed test rows -> a baseline entry of the variant format ``claims`` reads (seed_variant's)."""
+    summary = {}
+    for k in METRICS:
+        xs = [r[k] for r in rows]
+        m = sum(xs) / len(xs)
+        summary[k] = {"mean": m, "std": (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5}
+    return {"label": label, "summary": summary, "cost_per_seed": {str(r["seed"]): r["cost"] for r in rows}}
+
+
+def judge_paper(directory: Path):
+    """(task, seed, result, claims of a prog-retrained entry) for every paper task-seed: the paper's claims."""
+    for task, runs in sorted(load_seeds(directory).items()):
+        for r in sorted(runs, key=lambda r: r.seed):
+            v = seed_variant(r)
+
+            def holds(entry: dict, v=v, task=task) -> dict:
+                return {c.name: bool(c.holds) for c in claims(task, dict(v, baselines=dict(v["baselines"],
+                                                                                          **{"prog-retrained": entry})))}
+            yield task, r.seed, json.loads(Path(r.source).read_text()), holds
+
+
+def judge_beyond(directory: Path):
+    """The same for the tasks beyond the paper: issue 37's four tests (beyond_paper.verdict)."""
+    for f in sorted(directory.glob("*-seed*.json")):
+        res = json.loads(f.read_text())
+
+        def holds(entry: dict, res=res) -> dict:
+            return verdict(dict(res, baselines=dict(res["baselines"], **{"prog-retrained": entry})))["holds"]
+        yield res["task"], res["seed"], res, holds
+
+
+def run(judged) -> list[dict]:
+    """One row per (task, training seed, margin): the pick, its validation and test figures, what holds."""
+    out = []
+    for task, seed, res, holds in judged:
+        front = res.get("front_pick") or {}
+        cands = front.get("candidates") or []
+        if not cands:
+            continue
+        rows = [{"name": c["name"], "loss": c["loss"], "degree": c["degree"]} for c in cands]
+        by_name = {c["name"]: c for c in cands}
+        for margin in MARGINS:
+            chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
+                                          margin=margin) if c.get("picked"))
+            cand = by_name[chosen["name"]]
+            tests = test_rows(front["config"], cand)
+            entry = dict(as_baseline(cand["label"], tests), per_seed=tests)
+            out.append({"task": task, "seed": seed, "margin": margin, "pick": cand["name"],
+                        "val_loss": cand["loss_mean"], "val_degree": cand["degree"],
+                        "test_loss": entry["summary"]["cost"]["mean"],
+                        "test_max_degree": entry["summary"]["max_degree"]["mean"],
+                        "holds": {k: bool(h) for k, h in holds(entry).items()}})
+            print(f"{task} seed {seed} margin {margin}: {cand['name']:6s} test loss {out[-1]['test_loss']:.3f} max "
+                  f"in+out {out[-1]['test_max_degree']:.2f}; fails: "
+                  + (", ".join(k for k, h in out[-1]["holds"].items() if not h) or "none"), flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--suite", default="paper", choices=list(SUITES), help="which result files (beyond_paper's suites)")
+    ap.add_argument("--json", default="", help="also write the rows here")
+    a = ap.parse_args()
+    out = SUITES[a.suite].out
+    rows = run(judge_paper(out) if a.suite == "paper" else judge_beyond(out))
+    if a.json:
+        Path(a.json).write_text(json.dumps(rows, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
