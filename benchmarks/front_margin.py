@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -33,15 +34,18 @@ MARGINS = (0.02, 0.01, 0.005, 0.0, None)
 """pipeline.margin values tried (0.02: the default; None: the paper's test, similar when the interval holds 0)"""
 
 
-def test_rows(cfg: dict, cand: dict) -> list[dict]:
-    """A candidate's per-seed test rows, evaluated now if the run has not (its retrained model is reused)."""
+def test_rows(res: dict, cand: dict) -> list[dict]:
+    """A candidate's per-seed test rows, evaluated now if the run has not (its retrained model is reused): the run's
+    own command line (its task, budget, seed and config folder) as `neurosym eval` of prog-retrained under the
+    candidate's program."""
+    cfg = res["front_pick"]["config"]
     path = Path(cfg["exp_dir"]) / "eval" / cand["label"] / "metrics.json"
     if not path.exists():
-        cmd = [str(Path(sys.executable).parent / "neurosym"), "eval", f"task={cfg['task']['name']}",
-               f"budget={cfg['budget']['name']}", f"seed={cfg['seed']}", "baseline=prog-retrained",
-               f"program={cand['program_file']}", f"runs_root={cfg['runs_root']}", "threads=1", "plots=false",
-               "progress=plain"]
-        p = subprocess.run(cmd, capture_output=True, text=True)
+        args = [a for a in shlex.split(res["command"])[2:]
+                if not a.startswith(("baselines=", "plots=", "progress=", "runs_root="))]
+        cmd = [str(Path(sys.executable).parent / "neurosym"), "eval", *args, "baseline=prog-retrained",
+               f"program={cand['program_file']}", f"runs_root={cfg['runs_root']}", "plots=false", "progress=plain"]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
         if p.returncode != 0 or not path.exists():
             sys.exit(f"front_margin: evaluating {cand['label']} failed: {p.stderr.strip()[-300:]}")
     return json.loads(path.read_text())["per_seed"]
@@ -50,7 +54,7 @@ def test_rows(cfg: dict, cand: dict) -> list[dict]:
 def as_baseline(label: str, rows: list[dict]) -> dict:
     """Per-seed test rows -> a baseline entry of the variant format ``claims`` reads (seed_variant's)."""
     summary = {}
-    for k in METRICS:
+    for k in (k for k in METRICS if k in rows[0]):  # a task without collisions records none
         xs = [r[k] for r in rows]
         m = sum(xs) / len(xs)
         summary[k] = {"mean": m, "std": (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5}
@@ -93,7 +97,7 @@ def run(judged) -> list[dict]:
             chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
                                           margin=margin) if c.get("picked"))
             cand = by_name[chosen["name"]]
-            tests = test_rows(front["config"], cand)
+            tests = test_rows(res, cand)
             entry = dict(as_baseline(cand["label"], tests), per_seed=tests)
             out.append({"task": task, "seed": seed, "margin": margin, "pick": cand["name"],
                         "val_loss": cand["loss_mean"], "val_degree": cand["degree"],

@@ -17,6 +17,8 @@ from .tables import shown
 DEFAULTS = SUITES["paper"].out
 MARGIN_FILE = DEFAULTS.parent / "front-margin.json"
 """benchmarks/front_margin.py's rows: each paper task-seed's front pick re-made at other pipeline.margin values"""
+MARGIN_BEYOND = DEFAULTS.parent / "front-margin-beyond.json"
+"""the same for the tasks beyond the paper (``--suite beyond``: issue 37's four tests)"""
 
 
 def trade(runs: list, baseline: str, metric: str) -> float:
@@ -89,6 +91,14 @@ def margin_table(method: dict, path: Path = MARGIN_FILE) -> list[str]:
             cells.append(f"{'; '.join(lost) or 'none'} ({deg:.2f})")
         label = "null (the paper's test)" if m is None else f"{m:g}" + (" (default)" if m == 0.02 else "")
         out.append(f"| {label} | " + " | ".join(cells) + " |")
+    if MARGIN_BEYOND.exists():  # the tasks beyond the paper: does any of the four tests move with the margin?
+        rows = json.loads(MARGIN_BEYOND.read_text())
+        first = {(r["task"], r["seed"]): r["holds"] for r in rows if r["margin"] == rows[0]["margin"]}
+        moved = sorted({f"{r['task']} seed {r['seed']}" for r in rows if r["holds"] != first[(r["task"], r["seed"])]})
+        out += ["", f"On the tasks beyond the paper ({', '.join(sorted({r['task'] for r in rows}))}; "
+                "`python benchmarks/front_margin.py --suite beyond --json docs/results/front-margin-beyond.json`), "
+                + (f"issue 37's four tests change with the margin on {', '.join(moved)}." if moved else
+                   "none of issue 37's four tests changes on any training seed at any of these margins.")]
     return out
 
 
