@@ -34,7 +34,7 @@ MARGINS = (0.02, 0.01, 0.005, 0.0, None)
 """pipeline.margin values tried (0.02: the default; None: the paper's test, similar when the interval holds 0)"""
 
 
-def test_rows(res: dict, cand: dict) -> list[dict]:
+def candidate_rows(res: dict, cand: dict) -> list[dict]:
     """A candidate's per-seed test rows, evaluated now if the run has not (its retrained model is reused): the run's
     own command line (its task, budget, seed and config folder) as `neurosym eval` of prog-retrained under the
     candidate's program."""
@@ -97,7 +97,7 @@ def run(judged) -> list[dict]:
             chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
                                           margin=margin) if c.get("picked"))
             cand = by_name[chosen["name"]]
-            tests = test_rows(res, cand)
+            tests = candidate_rows(res, cand)
             entry = dict(as_baseline(cand["label"], tests), per_seed=tests)
             out.append({"task": task, "seed": seed, "margin": margin, "pick": cand["name"],
                         "val_loss": cand["loss_mean"], "val_degree": cand["degree"],
