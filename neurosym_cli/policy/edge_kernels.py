@@ -45,6 +45,28 @@ def _edge(e, wt, bias, o):  # pragma: no cover - compiled
             e[d] += w[d] * op
 
 
+@njit(inline="always", **_JIT)
+def _edge_back(ge, o, wt, gw_i, go):  # pragma: no cover - compiled
+    """Back through ``_edge`` for one pair: ge (D,) the pre-activation's gradient, o (P,) the view -> adds W's
+    gradient to gw_i (P, D) and writes the view's gradient go (P,) = W^T ge."""
+    zero = np.float32(0)
+    for p in range(o.shape[0]):
+        op, w, gwp, s = o[p], wt[p], gw_i[p], zero
+        for d in range(ge.shape[0]):
+            gwp[d] += ge[d] * op
+            s += ge[d] * w[d]
+        go[p] = s
+
+
+@njit(inline="always", **_JIT)
+def _fold(gw, gb, gw_i, gb_i):  # pragma: no cover - compiled
+    """Add one receiver's float32 weight and bias gradients (P, D), (D,) to the float64 totals."""
+    for d in range(gb.shape[0]):
+        gb[d] += gb_i[d]
+        for p in range(gw.shape[0]):
+            gw[p, d] += gw_i[p, d]
+
+
 @njit(**_JIT)
 def _logits_fwd(q, rel, wt, bias):  # pragma: no cover - compiled
     """q (B, N, D) scaled queries, rel (B, N, N, P) the views o_ij, wt (P, D) = W_k^T, bias (D,) -> logits (B, N, N)."""
@@ -87,16 +109,8 @@ def _logits_bwd(g, q, rel, wt, bias):  # pragma: no cover - compiled
                     gqi[d] += gij * (k[d] if on else zero)
                     gk[d] = gij * qi[d] if on else zero
                     gb_i[d] += gk[d]
-                for p in range(npl):
-                    op, w, gwp, s = o[p], wt[p], gw_i[p], zero
-                    for d in range(nd):
-                        gwp[d] += gk[d] * op
-                        s += gk[d] * w[d]
-                    grel[b, i, j, p] = s
-            for d in range(nd):
-                gb[d] += gb_i[d]
-                for p in range(npl):
-                    gw[p, d] += gw_i[p, d]
+                _edge_back(gk, o, wt, gw_i, grel[b, i, j])
+            _fold(gw, gb, gw_i, gb_i)
     return gq, grel, gw, gb
 
 
@@ -145,16 +159,8 @@ def _messages_bwd(g, w, rel, wt, bias):  # pragma: no cover - compiled
                     gm[d] = gi[d] * wij if on else zero
                     gb_i[d] += gm[d]
                 gwt[b, i, j] = acc
-                for p in range(npl):
-                    op, wp, gwp, s = o[p], wt[p], gw_i[p], zero
-                    for d in range(nd):
-                        gwp[d] += gm[d] * op
-                        s += gm[d] * wp[d]
-                    grel[b, j, i, p] = s
-            for d in range(nd):
-                gb[d] += gb_i[d]
-                for p in range(npl):
-                    gw[p, d] += gw_i[p, d]
+                _edge_back(gm, o, wt, gw_i, grel[b, j, i])
+            _fold(gw, gb, gw_i, gb_i)
     return gwt, grel, gw, gb
 
 
