@@ -182,6 +182,21 @@ def test_the_front_is_monotone_and_within_its_budgets():
         assert r["max_in"] <= k + 1e-9 and r["max_in"] <= r["degree"] + 1e-9 and r["max_out"] <= r["degree"] + 1e-9
 
 
+def test_det_progs_front_holds_argmax_rules_only():
+    """det-prog's front (the ablation without random rules, appendix B): its chains start from silence, so silence
+    must be written in argmax rules too, or a chain mutating its filters keeps random rules in every budget."""
+    env, pol, data = _setup()
+    k = 2
+    sc = _scorer(env, pol, data, objective="paper", lam=0.3, cap=k)
+    rows, _ = search_front(sc, _spec(k, det=True), archive=[], budgets=[0.0, 1.0, 2.0, 4.0], steps=25,
+                           seed="front", gen=torch.Generator().manual_seed(1))
+    assert rows[0]["degree"] == 0 and rows[0]["l1_ratio"] == pytest.approx(1.0)
+    assert rows[-1]["degree"] > 0  # the chains moved off silence
+    for r in rows:
+        assert "random(" not in r["program"] and r["program"].startswith("argmax("), r["program"]
+    assert all(isinstance(rule, ArgMaxRule) for rule in silence("d", k))
+
+
 def test_a_planted_program_is_recovered_at_its_budget():
     env, pol, data = _planted()
     sc = _scorer(env, pol, data, objective="paper", lam=0.0, cap=1)

@@ -34,10 +34,11 @@ def default_budgets(k: int, n_max: int) -> list[float]:
     return [float(b) for b in range(min(k + n_max - 1, 3 * k) + 1)]
 
 
-def silence(feature: str, k: int) -> tuple[Rule, ...]:
-    """K rules that never fire: random(filter(f >= 1 and f <= 0, l)) asks for both at once."""
-    never = RandomRule(And(Test(Linear(((feature, 1.0),)), 1.0), Test(Linear(((feature, -1.0),)), -0.0)))
-    return (never,) * k
+def silence(feature: str, k: int, det: bool = False) -> tuple[Rule, ...]:
+    """K rules that never fire: random(filter(f >= 1 and f <= 0, l)) asks for both at once; ``det`` (det-prog's
+    space, argmax rules only): argmax(map(1.0*f, filter(...))), so a chain started from it stays in that space."""
+    never = And(Test(Linear(((feature, 1.0),)), 1.0), Test(Linear(((feature, -1.0),)), -0.0))
+    return ((ArgMaxRule(Linear(((feature, 1.0),)), never) if det else RandomRule(never)),) * k
 
 
 RANGE_FEATURE = "d"
@@ -150,7 +151,7 @@ def search_front(scorer: CachedScorer, spec: RoundSpec, *, archive: list[tuple[R
     unit = scorer.silent_l1()
     if not unit > 0:
         unit = 1.0  # the oracle ignores its messages: every program ties with silence, L1 ratios read as L1
-    pool = [_entry(scorer, silence(scorer.data[0].feats.names[0], spec.rules), "silence")]
+    pool = [_entry(scorer, silence(scorer.data[0].feats.names[0], spec.rules, spec.det), "silence")]
     pool += [_entry(scorer, rules, "search") for rules in archive]
     chain = dataclasses.replace(spec, steps=steps, restarts=0, patience=0, search="mcmc")
     for b in sorted(budgets):
