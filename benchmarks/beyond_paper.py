@@ -124,15 +124,19 @@ def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, .
     from neurosym_cli import api
     from neurosym_cli.run.layout import RunFolder
 
-    from neurosym_cli.stages.front_select import FRONT_RUNS, RETRAINED
+    from neurosym_cli.stages.front_select import family_of
 
     run = RunFolder(exp)
-    front = sorted(exp.glob("select/front/*.json"))
-    picked = json.loads(front[-1].read_text())["picked"]["label"] if front else None
+    choices = {}  # each family's front choice (a choice written before det-prog's front names no search: prog's)
+    for f in sorted(exp.glob("select/front/*.json")):
+        rec = json.loads(f.read_text())
+        choices[rec.get("search", "prog")] = rec
     baselines = {}
     for f in run.metrics_files():
         m = json.loads(f.read_text())
-        if m["baseline"] in FRONT_RUNS and picked and m["label"] != picked.replace(RETRAINED, m["baseline"], 1):
+        fam = family_of(m["baseline"])
+        picked = choices[fam.search]["picked"]["label"] if fam and fam.search in choices else None
+        if picked and m["label"] != picked.replace(fam.retrained, m["baseline"], 1):
             continue  # another program's evaluation left in the run directory (an earlier front's pick)
         if suite.baselines is None or m["baseline"] in suite.baselines:
             baselines[m["baseline"]] = {"label": m["label"], "summary": m["summary"], "per_seed": m["per_seed"],
@@ -143,7 +147,7 @@ def collect(exp: Path, task: Task, seed: int, wall_s: float, extra: tuple[str, .
     res = {"task": task.name, "about": task.about, "seed": seed, "command": "neurosym pipeline " + " ".join(
                a for a in args if not a.startswith("runs_root")),
            "baselines": baselines, "programs": programs,
-           "front_pick": json.loads(front[-1].read_text()) if front else None,
+           "front_pick": choices.get("prog"), "det_front_pick": choices.get("det-prog"),
            "timings": json.loads(timings.read_text()) if timings.exists() else {},
            "wall_s": round(wall_s, 1), "machine": {**machine(exp), "cores": os.cpu_count()}}
     if suite.seed_format:  # the seed-file format: the budget and the run's K, lambda and features

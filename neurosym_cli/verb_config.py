@@ -182,7 +182,7 @@ class PipelineConfig:
     at its sparse end, under the nearest agent within a radius: up to three more retrainings), and
     take the lowest max in+out whose validation loss is similar to the best (``margin``; silence only where
     no-comm is as good as tf-full on validation)"""
-    margin: Optional[float] = 0.02
+    margin: Optional[float] = 0.01
     """select=front: a program is similar to the validation-best when the 95 % upper end of its paired loss
     difference is at most this share of the best's mean loss (an equivalence test, scale-free: the same on every
     task); null: the paper's test (the interval contains 0), which let a noisy program 6 % worse pass at 10

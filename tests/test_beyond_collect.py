@@ -35,6 +35,31 @@ def test_the_collector_takes_the_picks_evaluation_and_not_a_stale_one(tmp_path):
     assert verdict(res)["cost"]["prog-retrained"] == 7.0
 
 
+def test_each_family_keeps_its_own_fronts_pick(tmp_path):
+    """det-prog's front choice (select/front/det-<tag>.json, 'search': det-prog) filters det-prog's evaluations, and
+    sorts before prog's: prog's choice is still the one that filters prog's."""
+    from benchmarks.beyond_paper import TASKS, Suite, collect
+
+    exp = tmp_path / "run"
+    det_pick, det_stale = "det-prog-retrained-file-det-k2-v1-b2-cccc-v1", "det-prog-retrained-k2-lam0.5-v1"
+    pick = "prog-retrained-file-k2-v1-b1-bbbb-v1"
+    for label, baseline, cost in [(det_pick, "det-prog-retrained", 7.5), (det_stale, "det-prog-retrained", 4.0),
+                                  ("det-prog-file-det-k2-v1-b2-cccc-v1", "det-prog", 9.5), (pick, "prog-retrained", 7.0),
+                                  ("prog-retrained-file-k2-v1-b2-dddd-v1", "prog-retrained", 3.0),
+                                  ("tf-full", "tf-full", 6.0), ("no-comm", "no-comm", 8.0)]:
+        _metrics(exp, label, baseline, cost)
+    (exp / "select/front").mkdir(parents=True)
+    (exp / "select/front/k2-v1.json").write_text(json.dumps({"picked": {"label": pick}}))  # before 'search'
+    (exp / "select/front/det-k2-v1.json").write_text(json.dumps({"search": "det-prog", "picked": {"label": det_pick}}))
+    (exp / "train/oracle").mkdir(parents=True)
+    (exp / "train/oracle/manifest.json").write_text(json.dumps({"runtime": {"cpu_kernels": "avx2"}}))
+    res = collect(exp, TASKS["consensus"], 0, 1.0, suite=Suite(TASKS, tmp_path, None))  # every baseline
+    labels = {b: e["label"] for b, e in res["baselines"].items()}
+    assert labels["det-prog-retrained"] == det_pick and labels["det-prog"] == "det-prog-file-det-k2-v1-b2-cccc-v1"
+    assert labels["prog-retrained"] == pick
+    assert res["front_pick"]["picked"]["label"] == pick and res["det_front_pick"]["picked"]["label"] == det_pick
+
+
 def _front(picked: str, means: dict) -> dict:
     """A front choice with tf-full at 100 and no-comm at 200 on validation, candidates at the given mean losses."""
     return {"picked": {"name": picked}, "retrain_rollouts": 50, "tf_full": {"loss": [99.0, 101.0]},

@@ -194,7 +194,7 @@ def test_det_progs_front_holds_argmax_rules_only():
     assert rows[-1]["degree"] > 0  # the chains moved off silence
     for r in rows:
         assert "random(" not in r["program"] and r["program"].startswith("argmax("), r["program"]
-    assert all(isinstance(rule, ArgMaxRule) for rule in silence("d", k))
+    assert all(isinstance(rule, ArgMaxRule) for rule in silence("d", k, det=True))
 
 
 def test_a_planted_program_is_recovered_at_its_budget():

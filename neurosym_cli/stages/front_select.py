@@ -44,13 +44,50 @@ from .front import read_front
 from .guard import SILENT, communication_helps
 from .validation import choose, validate
 
-SEARCH, SILENT_BASELINE = "prog", "no-comm"
-"""the baseline whose search's front is chosen among, and the model that hears nobody (the rule's reference)"""
-RETRAINED = "prog-retrained"
-"""the baseline each candidate is retrained and validated as"""
-FRONT_RUNS = (SEARCH, RETRAINED)
-"""the baselines that run under the pick (and under a program= of verbs that run several baselines: figures,
-stress); det-prog and det-prog-retrained keep their own search"""
+SILENT_BASELINE = "no-comm"
+"""the model that hears nobody (the rule's reference)"""
+
+
+@dataclasses.dataclass(frozen=True)
+class Family:
+    """A searched program and the baselines that run under it: the oracle as it is (``search``, whose synth writes
+    the front) and the oracle retrained under it (``retrained``: what each candidate is retrained and validated
+    as)."""
+
+    search: str
+    retrained: str
+
+    @property
+    def runs(self) -> tuple[str, str]:
+        return self.search, self.retrained
+
+    @property
+    def node(self) -> str:
+        """the key of its front selection in the pipeline's graph"""
+        return f"front selection {self.search}"
+
+
+PROG = Family("prog", "prog-retrained")
+"""the method (sections 3.3-3.5); program= is its family's alone"""
+DET = Family("det-prog", "det-prog-retrained")
+"""appendix B's ablation, the method without random rules: under pipeline.select=front it gets its own front and
+pick by the same rule, as under the paper's method it gets select's own pick (an ablation of the method as run)"""
+FAMILIES = (PROG, DET)
+
+
+def family_of(name: str) -> Family | None:
+    """The family baseline ``name`` runs in (None: it runs under no searched program)."""
+    return next((f for f in FAMILIES if name in f.runs), None)
+
+
+def fronted(cfg: RunConfig) -> list[Family]:
+    """The families whose program the pipeline picks among their search's front: under pipeline.select=front, each
+    with a baseline in ``cfg.baselines``; prog's not when program= gives it its program."""
+    if cfg.pipeline.select != "front":
+        return []
+    return [f for f in FAMILIES if any(b in f.runs for b in cfg.baselines) and not (f is PROG and cfg.program)]
+
+
 RULE = ("retrained under each distinct program of the front, validated on budget.val_seeds: among the programs "
         "whose paired 95% Student-t interval of the validation loss difference to the best ends below "
         "pipeline.margin x the best's mean loss, the lowest validation max in+out (lower mean loss on a tie); "
@@ -125,23 +162,20 @@ def write_candidate(path: Path, cand: dict, tag: str) -> None:
 
 # --------------------------------------------------------------------------------------------- after the stage
 ONE_BASELINE, SEVERAL = ("eval", "render", "export"), ("stress", "figures")
-"""the verbs that, given no program=, run prog and prog-retrained under the pipeline's front pick when there is one
-(what the pipeline evaluated is what they show): of one baseline= (prog or prog-retrained), or of several (their
-program baselines of FRONT_RUNS)"""
+"""the verbs that, given no program=, run a family's baselines under the pipeline's front pick when there is one
+(what the pipeline evaluated is what they show): of one baseline= (of a family), or of several (``program_for``)"""
 
 
-def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
-    """``cfg`` with program= the pipeline's pick among its search's front (select/front/<tag>.json), when ``verb``
-    follows the pick for ``cfg``'s baseline, no program= is given, pipeline.select is front and the pipeline chose;
-    else ``cfg``."""
-    follows = verb in SEVERAL or (verb in ONE_BASELINE and cfg.baseline.name in FRONT_RUNS)
-    if not follows or cfg.program or cfg.pipeline.select != "front":
-        return cfg
-    rd = RunDir(dataclasses.replace(cfg, baseline=get(SEARCH), program=""))
+def front_program(cfg: RunConfig, fam: Family) -> Path | None:
+    """The file of the pipeline's pick among ``fam``'s front (select/front/<tag>.json) for ``cfg``'s task, budget,
+    seed and search settings; None where pipeline.select is not front or no pipeline chose."""
+    if cfg.pipeline.select != "front":
+        return None
+    rd = RunDir(dataclasses.replace(cfg, baseline=get(fam.search), program=""))
     tag = rd.program_tag
     choice = rd.front_choice_file(tag)
     if not choice.exists():
-        return cfg  # no pipeline ran this search's selection: the single-lam program, as before
+        return None  # no pipeline ran this search's selection: the single-lam program, as before
     rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"picked": dict})
     try:
         path = rd.front_candidate_file(tag, rec["picked"].get("name") or f"b{float(rec['picked']['budget']):g}")
@@ -152,10 +186,35 @@ def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
     if not path.exists():
         raise UserError(f"the front choice {choice} names {path}, which is gone; run `neurosym pipeline "
                         f"{run_args(cfg)}` to write it again")
-    say(f"{cfg.baseline.name if verb in ONE_BASELINE else ', '.join(FRONT_RUNS)}: the pipeline's pick among the "
-        f"front ({about(rec['picked'])}, {path.name}); program=<file> for another, pipeline.select=none for the "
-        "single-lam search's program")
+    return path
+
+
+def apply_front_pick(cfg: RunConfig, verb: str) -> RunConfig:
+    """``cfg`` with program= the pipeline's pick among its family's front, when ``verb`` follows the pick for
+    ``cfg``'s baseline (of several: prog's, the others by ``program_for``), no program= is given and the pipeline
+    chose under pipeline.select=front; else ``cfg``."""
+    fam = PROG if verb in SEVERAL else family_of(cfg.baseline.name) if verb in ONE_BASELINE else None
+    if fam is None or cfg.program:
+        return cfg
+    path = front_program(cfg, fam)
+    if path is None:
+        return cfg
+    say(f"{cfg.baseline.name if verb in ONE_BASELINE else ', '.join(fam.runs)}: the pipeline's pick among the "
+        f"front ({path.name}); program=<file> for another, pipeline.select=none for the single-lam search's program")
     return dataclasses.replace(cfg, program=str(path))
+
+
+def program_for(cfg: RunConfig, name: str) -> str:
+    """The program file baseline ``name`` runs under in a verb of several baselines (stress, figures): program= (given,
+    or prog's pick by apply_front_pick) for prog's family, the pipeline's pick for another family's (its own search's
+    program where none), "" for a baseline of none."""
+    fam = family_of(name)
+    if fam is None:
+        return ""
+    if fam is PROG:
+        return cfg.program
+    path = front_program(cfg, fam)
+    return str(path) if path else ""
 
 
 # --------------------------------------------------------------------------------------------- the stage
@@ -164,14 +223,15 @@ def validation(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, An
     return validate(dataclasses.replace(cfg, baseline=get(baseline), cmd="eval", program=program))
 
 
-def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Callable[[str, str], Job],
+def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job],
+                 validate_job: Callable[[str, str], Job],
                  on_candidates: Callable[[list[str]], None] | None = None) -> Flow:
-    """Steps 2-5 of the module docstring, as a flow (stages/flow.py) that starts once step 1's artifacts are made;
-    its value is the picked program's file. ``retrain(program)``: the job that retrains prog-retrained under a
-    program file (the pipeline's stage); ``validate_job(baseline, program)``: the job of ``validation``;
-    ``on_candidates``: told the program files about to be retrained (the pipeline's time left)."""
+    """Steps 2-5 of the module docstring for ``fam``'s front, as a flow (stages/flow.py) that starts once step 1's
+    artifacts are made; its value is the picked program's file. ``retrain(baseline, program)``: the job that
+    retrains ``baseline`` under a program file (the pipeline's stage); ``validate_job(baseline, program)``: the job
+    of ``validation``; ``on_candidates``: told the program files about to be retrained (the pipeline's time left)."""
     t0 = time.perf_counter()
-    search = dataclasses.replace(cfg, baseline=get(SEARCH), program="")
+    search = dataclasses.replace(cfg, baseline=get(fam.search), program="")
     rd = RunDir(search)
     tag = rd.program_tag
     remake = f"neurosym synth {run_args(cfg)} synth.front=true overwrite=true"
@@ -183,7 +243,7 @@ def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Ca
     tf, nc = yield [validate_job(ORACLE, ""), validate_job(SILENT_BASELINE, "")]
     helps, gap, gap_ci = communication_helps(tf["loss"], nc["loss"])
     near = sum(c["name"].startswith("near") for c in cands)
-    say(f"front selection {cfg.task.name} ({tag}): {len(cands) - near} distinct program(s) of "
+    say(f"front selection {cfg.task.name} {fam.search} ({tag}): {len(cands) - near} distinct program(s) of "
         f"{len(front['rounds'][0]['budgets'])} budgets and {near} nearest-within-r, {cfg.budget.val_seeds} "
         f"validation seeds; tf-full {mean_ci(tf['loss'])[0]:.4g}, no-comm "
         f"{mean_ci(nc['loss'])[0]:.4g} (no-comm - tf-full {gap:+.3g} ± {gap_ci:.3g}: communication "
@@ -200,8 +260,8 @@ def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Ca
             + ", ".join(f"{x:.2f}" for x in cand["degree_on_d"]) + "): queued for retraining")
     if on_candidates is not None:
         on_candidates([str(p) for p in paths])
-    yield [retrain(str(p)) for p in paths]
-    vals = yield [validate_job(RETRAINED, str(p)) for p in paths]
+    yield [retrain(fam.retrained, str(p)) for p in paths]
+    vals = yield [validate_job(fam.retrained, str(p)) for p in paths]
     rows = []
     for k, (cand, path, v) in enumerate(zip(cands, paths, vals), start=1):
         m, h = mean_ci(v["loss"])
@@ -219,7 +279,7 @@ def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Ca
                     "budget.mcmc_steps")
     write_json(rd.front_choice_file(tag), {
         "command": "pipeline", "kind": "front-selection", "version": __version__, "task": cfg.task.name,
-        "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
+        "search": fam.search, "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
         "front_sha1": hashlib.sha1(rd.front_file.read_bytes()).hexdigest(), "val_seeds": cfg.budget.val_seeds,
         "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE, "margin": cfg.pipeline.margin,
         "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
@@ -228,6 +288,6 @@ def select_front(cfg: RunConfig, retrain: Callable[[str], Job], validate_job: Ca
                                            "loss_mean")},
         "candidates": ranked, "seconds": time.perf_counter() - t0, "config": cfg.record()})
     say(f"[green]front selection[/]: {about(chosen)}, validation loss {chosen['loss_mean']:.4g}, max "
-        f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - t0)}); prog and "
-        "prog-retrained run under it")
+        f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - t0)}); "
+        f"{fam.search} and {fam.retrained} run under it")
     return Path(chosen["program_file"])

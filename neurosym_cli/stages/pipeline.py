@@ -20,7 +20,7 @@ from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
 from .flow import Flow, Job, Node, Worker, one, run_flow
-from .front_select import FRONT_RUNS, RETRAINED, SEARCH, SILENT_BASELINE, select_front, validation
+from .front_select import PROG, SILENT_BASELINE, family_of, fronted, select_front, validation
 from .graph import Stage, plan, requires
 from .jobs import quiet_job
 from .results import print_table
@@ -34,9 +34,9 @@ RUNNERS = {"train": train, "synth": synthesize, "retrain": retrain, "eval": eval
 def stage_config(cfg: RunConfig, info: RunInfo, stage: Stage, program: str = "") -> tuple[RunConfig, RunInfo]:
     """The pipeline's config with the stage's command and baseline (what `neurosym <verb> baseline=B` composes);
     ``program``: the file a program baseline's retrain or eval runs under (program=), "" for the searched one.
-    pipeline.select=front searches prog's front (synth.front=true)."""
+    pipeline.select=front searches the front of each family it picks for (synth.front=true)."""
     b = with_run(cfg, stage.baseline)
-    if stage.verb == "synth" and stage.baseline == "prog" and cfg.pipeline.select == "front":
+    if stage.verb == "synth" and family_of(stage.baseline) in fronted(cfg):
         cfg = dataclasses.replace(cfg, synth=dataclasses.replace(cfg.synth, front=True))
     program = program if stage.verb != "synth" and b.has_program else ""
     return dataclasses.replace(cfg, cmd=stage.verb, baseline=b, program=program), RunInfo(info.multirun, info.log_dir)
@@ -155,8 +155,6 @@ def pipeline_jobs(cfg: RunConfig) -> int:
     return max(1, cores // cfg.threads)
 
 
-FRONT = "front selection"
-"""the key of the front selection's node in the pipeline's graph"""
 CANDIDATES_GUESS = 4
 """front candidates assumed by the time left before the front is read and no earlier run timed them (a two-rule
 front's distinct programs and nearest-within-r ones: 3 to 6 on the main job's seeds)"""
@@ -202,24 +200,29 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     if cfg.program:  # a hand-written program: prog and prog-retrained run under it, nothing is searched for them
         stages = [s for s in stages if s != Stage("synth", "prog")]
         say(f"pipeline: prog and prog-retrained run under program={cfg.program}")
-    front = not cfg.program and cfg.pipeline.select == "front" and any(b in FRONT_RUNS for b in cfg.baselines)
-    if not cfg.program and cfg.pipeline.select == "front" and not front:
-        log.warning("pipeline.select=front: neither prog nor prog-retrained is in baselines, nothing runs under a "
-                    "program; the front is not chosen among")
-    first = [Stage("train", ORACLE), Stage("train", SILENT_BASELINE), Stage("synth", SEARCH)] if front else []
-    # what the front selection needs goes first, listed or not: its retrainings are the longest chain
+    fams = fronted(cfg)  # the families whose program is picked among their front
+    if cfg.pipeline.select == "front" and not fams and not cfg.program:
+        log.warning("pipeline.select=front: no baseline of baselines runs under a searched program (prog, det-prog "
+                    "and their retrainings); the front is not chosen among")
+    first = ([Stage("train", ORACLE), Stage("train", SILENT_BASELINE)] + [Stage("synth", f.search) for f in fams]
+             if fams else [])
+    # what the front selections need goes first, listed or not: their retrainings are the longest chains
     stages = first + [s for s in stages if s not in first]
-    search = RunDir(dataclasses.replace(cfg, baseline=get(SEARCH), program=""))  # the front's search
-    chosen = {"program": cfg.program}  # the program prog and prog-retrained run under, once known
+    searches = {f: RunDir(dataclasses.replace(cfg, baseline=get(f.search), program="")) for f in fams}
+    chosen = {PROG.search: cfg.program}  # family -> the program its baselines run under, once known
 
     def program_of(stage: Stage) -> str:
-        return chosen["program"] if stage.baseline in FRONT_RUNS else ""
+        fam = family_of(stage.baseline)
+        return chosen.get(fam.search, "") if fam else ""
+
+    def waits_for_pick(stage: Stage) -> bool:
+        return stage.verb != "synth" and family_of(stage.baseline) in fams
 
     # the stages with work left (a finished training or search is reused; an evaluation always reruns, in a
-    # second); under the front, its pick's retraining is one of its candidates', done once it has chosen
-    to_do = [s for s in stages if s.verb != "eval" and not (front and s.baseline in FRONT_RUNS and s.verb != "synth")
+    # second); under a front, its pick's retraining is one of its candidates', done once it has chosen
+    to_do = [s for s in stages if s.verb != "eval" and not waits_for_pick(s)
              and stage_units(stage_config(cfg, info, s, program_of(s))[0], s)]
-    chose = not front or search.front_choice_file(search.program_tag).exists()
+    chose = all(rd.front_choice_file(rd.program_tag).exists() for rd in searches.values())
     jobs = min(pipeline_jobs(cfg), len(stages)) if to_do or not chose else 1  # nothing to make: no worker started
     job_cfg, job_info = quiet_job(cfg, info) if jobs > 1 else (cfg, info)  # workers: plain lines, no tables
     # wall time of each stage (s); a stage that reused its artifact keeps the time it first took
@@ -231,7 +234,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
     made: set[str] = set()  # timing names of the stages that ran in this pipeline
     done_names: set[str] = set()  # graph keys of the nodes done
     started: dict[str, float] = {}  # stage name -> when it started
-    candidates: list[str] = []  # the front's program files, once it is read
+    candidates: dict[str, list[str]] = {f.search: [] for f in fams}  # each front's program files, once read
 
     def record(out: Any) -> None:
         """A job's result, in this process: a stage's pace and wall time (a reused artifact takes ~0 s: keep the time
@@ -243,8 +246,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
                                       1)
             write_json(timing_file, timings)
 
-    def retrain_job(program: str) -> Job:
-        return Job(run_stage, (job_cfg, job_info, Stage("retrain", RETRAINED), program),
+    def retrain_job(baseline: str, program: str) -> Job:
+        return Job(run_stage, (job_cfg, job_info, Stage("retrain", baseline), program),
                    f"retrain {Path(program).stem}")
 
     def validate_job(baseline: str, program: str) -> Job:
@@ -252,7 +255,7 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
 
     def remaining() -> list[float | None]:
         """Seconds of each piece of work not done (None: not known yet): stages not started, the running ones less
-        their time so far, the front's retrainings."""
+        their time so far, the fronts' retrainings."""
         out = []
         for s in stages:
             if s.name in done_names:
@@ -262,11 +265,13 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             if s.name in started and est is not None:  # running: what is left of it
                 est = max(0.0, est - (time.perf_counter() - started[s.name]))
             out.append(est)
-        if front and FRONT not in done_names:
-            stage = Stage("retrain", RETRAINED)
+        for fam, search in searches.items():
+            if fam.node in done_names:
+                continue
+            stage = Stage("retrain", fam.retrained)
             ours = f"{stage.name} {search.program_tag}-"  # this search's candidates in an earlier run
             guess = sum(k.startswith(ours) for k in timings) or CANDIDATES_GUESS
-            for f in candidates or [""] * guess:
+            for f in candidates[fam.search] or [""] * guess:
                 c = stage_config(cfg, info, stage, f)[0]
                 if not f or timing_name(stage, c) not in made:
                     out.append(pace.left([("retrain", stage_units(c, stage) if f else cfg.budget.retrain_rollouts,
@@ -297,8 +302,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
                      "" if left is not None else ": measured once a stage has run")
 
         needs = [w.name for w in waits(stage, stages)]
-        if front and stage.baseline in FRONT_RUNS and stage.verb != "synth":
-            needs.append(FRONT)
+        if waits_for_pick(stage):
+            needs.append(family_of(stage.baseline).node)  # type: ignore[union-attr]
         if stage.verb == "synth":  # its dataset D, collected once for every search of the oracle
             needs.append(dataset_key(RunDir(stage_config(cfg, info, stage)[0]).dataset_file))
         return Node(stage.name, start, tuple(needs), announce)
@@ -316,27 +321,28 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
                                      tuple(w.name for w in waits(s, stages)))
             datasets.setdefault(key, Node(key, lambda: iter(())))  # nothing to collect: done at once
     nodes[len(first):len(first)] = list(datasets.values())
-    if front:
-        def selection() -> Flow:
-            path = yield from select_front(cfg, retrain_job, validate_job, candidates.extend)
-            chosen["program"] = str(path)
-            done_names.add(FRONT)
+    for fam in reversed(fams):
+        def selection(fam=fam) -> Flow:
+            path = yield from select_front(cfg, fam, retrain_job, validate_job, candidates[fam.search].extend)
+            chosen[fam.search] = str(path)
+            done_names.add(fam.node)
             return path
 
-        nodes.insert(len(first), Node(FRONT, selection, tuple(s.name for s in first)))
+        needs = (Stage("train", ORACLE).name, Stage("train", SILENT_BASELINE).name, Stage("synth", fam.search).name)
+        nodes.insert(len(first), Node(fam.node, selection, needs))
     if jobs > 1:
         say(f"pipeline: {len(stages)} stages, up to {jobs} at once (pipeline.jobs; each its own process and thread)")
     values = run_flow(nodes, jobs, worker=Worker.like_this_process(cfg), on_result=record)
     results = {f"{s.verb}:{s.baseline}": values[s.name].result for s in stages}
-    print_table(cfg, program=chosen["program"])
+    print_table(cfg, program=chosen[PROG.search])
     from .render import make_figures
 
     figures: dict[str, str] = {}
     try:  # the paper's pictures of whom agents talk to, from what was just made (a few seconds)
         if cfg.plots:  # of the program prog-retrained ran under (the front's pick, under pipeline.select=front)
             log.info("pipeline: the figures (%s elapsed)", clock(time.perf_counter() - t0))
-            figures = make_figures(dataclasses.replace(cfg, program=chosen["program"]) if chosen["program"] else cfg,
-                                   info)
+            mine = chosen[PROG.search]
+            figures = make_figures(dataclasses.replace(cfg, program=mine) if mine else cfg, info)
     except UserError as e:
         log.warning("figures not drawn: %s", e)
     try:  # the table's plot, the training curves and the figures, to the trackers that keep files

@@ -99,10 +99,9 @@ def render_episode(cfg: RunConfig, info: RunInfo) -> dict:
 
 
 def _with_baseline(cfg: RunConfig, name: str) -> RunConfig:
-    from .front_select import FRONT_RUNS
+    from .front_select import program_for
 
-    b = with_run(cfg, name)  # program= (or the pipeline's front pick) is prog's and prog-retrained's alone
-    return dataclasses.replace(cfg, baseline=b, program=cfg.program if name in FRONT_RUNS else "")
+    return dataclasses.replace(cfg, baseline=with_run(cfg, name), program=program_for(cfg, name))
 
 
 def _records(cfg: RunConfig, names: list[str], episode: int,

@@ -14,7 +14,7 @@ from ..config import ConfigError, RunConfig, UserError
 from ..run import RunDir
 from ..policy.footprint import DoesNotFit
 from ..degrees import LEGEND, METRICS
-from .front_select import FRONT_RUNS
+from .front_select import program_for
 from ..utils.console import clock, log, say
 from ..utils.cpu import runtime
 from ..utils.io import write_csv, write_json
@@ -68,8 +68,7 @@ def run_stress(cfg: RunConfig, info: RunInfo) -> dict[str, Any]:
     skipped: dict[str, str] = {}
     stops: dict[str, dict[str, Any]] = {}  # label -> the smallest team that does not fit, and why
     for name in cfg.stress.baselines:
-        b = dataclasses.replace(cfg, baseline=with_run(cfg, name), cmd="eval",  # program=: prog's, prog-retrained's
-                                program=cfg.program if name in FRONT_RUNS else "")
+        b = dataclasses.replace(cfg, baseline=with_run(cfg, name), cmd="eval", program=program_for(cfg, name))
         label = RunDir(b).label
         done: dict[tuple[int, float], dict] = {}  # the task's own size at no failure is on both axes: run it once
         for axis, n, f in conds:
