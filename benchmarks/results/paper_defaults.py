@@ -9,6 +9,7 @@ from pathlib import Path
 
 from benchmarks.beyond_paper import PAPER_TASKS, SUITES
 from neurosym_cli.stages.front_select import about
+from neurosym_cli.verb_config import PipelineConfig
 
 from .files import PLANNED_SEEDS, SEED_TASKS, load_seeds, seed_variant
 from .seed_sections import claim_over_seeds, seed_claims
@@ -19,6 +20,7 @@ MARGIN_FILE = DEFAULTS.parent / "front-margin.json"
 """benchmarks/front_margin.py's rows: each paper task-seed's front pick re-made at other pipeline.margin values"""
 MARGIN_BEYOND = DEFAULTS.parent / "front-margin-beyond.json"
 """the same for the tasks beyond the paper (``--suite beyond``: issue 37's four tests)"""
+DEFAULT_MARGIN = PipelineConfig().margin
 
 
 def trade(runs: list, baseline: str, metric: str) -> float:
@@ -89,7 +91,7 @@ def margin_table(method: dict, path: Path = MARGIN_FILE) -> list[str]:
                     < sum(next(c.holds for c in cl if c.name == name) for cl in theirs) / max(len(theirs), 1)]
             deg = sum(r["test_max_degree"] for r in mine) / len(mine)
             cells.append(f"{'; '.join(lost) or 'none'} ({deg:.2f})")
-        label = "null (the paper's test)" if m is None else f"{m:g}" + (" (default)" if m == 0.02 else "")
+        label = "null (the paper's test)" if m is None else f"{m:g}" + (" (default)" if m == DEFAULT_MARGIN else "")
         out.append(f"| {label} | " + " | ".join(cells) + " |")
     if MARGIN_BEYOND.exists():  # the tasks beyond the paper: does any of the four tests move with the margin?
         rows = json.loads(MARGIN_BEYOND.read_text())
@@ -100,6 +102,19 @@ def margin_table(method: dict, path: Path = MARGIN_FILE) -> list[str]:
                 + (f"issue 37's four tests change with the margin on {', '.join(moved)}." if moved else
                    "none of issue 37's four tests changes on any training seed at any of these margins.")]
     return out
+
+
+def _rules(program: str, task: str, run) -> str:
+    """A picked program's rules as shown simplified, on one line (``round k:`` before each round's when several)."""
+    text, _, _ = shown(program, task, (run.pick or {}).get("features", "v1"))
+    rounds: list[list[str]] = [[]]  # rules per round, the round headers dropped ("round 2:" starts a new one)
+    for line in (ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")):
+        if not line.startswith("round "):
+            rounds[-1].append(line)
+        elif rounds[-1]:
+            rounds.append([])
+    return "; ".join(rounds[0]) if len(rounds) == 1 else " ".join(
+        f"round {k}: {'; '.join(rules)}." for k, rules in enumerate(rounds, start=1))
 
 
 def paper_defaults(directory: Path = DEFAULTS) -> str:
@@ -118,18 +133,10 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
         picks = []
         for r in runs:
             res = json.loads(Path(r.source).read_text())
-            pick = (res.get("front_pick") or {}).get("picked") or {}
-            if pick:
-                text, _, _ = shown(pick["program"], task, (r.pick or {}).get("features", "v1"))
-                rounds = [[]]  # rules per round, the round headers dropped ("round 2:" starts a new one)
-                for line in (ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("#")):
-                    if not line.startswith("round "):
-                        rounds[-1].append(line)
-                    elif rounds[-1]:
-                        rounds.append([])
-                shown_rules = "; ".join(rounds[0]) if len(rounds) == 1 else " ".join(
-                    f"round {k}: {'; '.join(rules)}." for k, rules in enumerate(rounds, start=1))
-                picks.append(f"- seed {r.seed}, {about(pick)}: `{shown_rules}`")
+            for key, who in (("front_pick", ""), ("det_front_pick", "det-prog, ")):  # prog's, then det-prog's
+                pick = (res.get(key) or {}).get("picked") or {}
+                if pick:
+                    picks.append(f"- seed {r.seed}, {who}{about(pick)}: `{_rules(pick['program'], task, r)}`")
         names, per_default = seed_claims(task, runs)
         _, per_method = seed_claims(task, method.get(task, []))
         digits = 3 if task == "unlabeled-goals" else 2
@@ -158,7 +165,8 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
             out += ["", "Where a claim is lost, what the programs traded (test means, averaged over the training "
                     f"seeds both ran, {', '.join(map(str, common))}): " + "; ".join(cells) + ". Under the defaults "
                     "prog-retrained runs the lowest degree of the front whose validation loss is within "
-                    "pipeline.margin of the best candidate's; det-prog is searched by the hybrid search, not MCMC."]
+                    "pipeline.margin of the best candidate's, det-prog-retrained the same among its own front (argmax "
+                    "rules only), where the run made one."]
             out += ["", "Per seed, where the defaults lose a claim the paper's method holds there:", "",
                     *lost_on(task, runs, per_default, per_method, digits)]
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",
