@@ -174,13 +174,13 @@ PIPELINE_SELECT = ("none", "front")
 
 @dataclass
 class PipelineConfig:
-    """`neurosym pipeline`: how the run's program (prog, prog-retrained) is chosen (stages/front_select.py)."""
+    """`neurosym pipeline`: how the run's programs (prog's and det-prog's) are chosen (stages/front_select.py)."""
 
     select: str = "front"
     """none (the paper's method, the default before issue 37): the single-lam search's program; front (default):
-    search the degree-budget front (synth.front=true), retrain the oracle under each distinct program of it (and,
-    at its sparse end, under the nearest agent within a radius: up to three more retrainings), and
-    take the lowest max in+out whose validation loss is similar to the best (``margin``; silence only where
+    for prog and for det-prog (each where listed), search the degree-budget front (synth.front=true), retrain the
+    oracle under each distinct program of it (and, at its sparse end, under the nearest agent within a radius: up
+    to three more retrainings), and take the lowest max in+out whose validation loss is similar to the best (``margin``; silence only where
     no-comm is as good as tf-full on validation)"""
     margin: Optional[float] = 0.01
     """select=front: a program is similar to the validation-best when the 95 % upper end of its paired loss

@@ -17,6 +17,9 @@ front's budgets instead of a lambda grid; issue 37).
        validation max in+out (the lower mean loss on a tie);
     5. the choice and every candidate's rows in select/front/<tag>.json; the pipeline then makes and evaluates prog
        and prog-retrained under the picked program, on the test seeds.
+
+det-prog (argmax rules only, appendix B's ablation of the method) goes through the same steps with its own front
+when det-prog or det-prog-retrained is listed (``Family``; its files det-<tag>...).
 """
 
 from __future__ import annotations
