@@ -158,6 +158,9 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
     assert picked["label"] in labels and picked["label"].replace("det-prog-retrained", "det-prog", 1) in labels
     p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=det-prog-retrained"], tmp_path)
     assert "the pipeline's pick among the front" in p.stdout and picked["label"] in p.stdout
+    run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "stress.baselines=[det-prog-retrained]",
+         "stress.agents=[5]", "stress.failure=[0.0]", "stress.seeds=1", "plots=false"], tmp_path)
+    assert picked["label"] in (exp / "stress/stress.csv").read_text()  # a verb of several baselines: det's pick too
 
 
 def test_select_lam_grid_follows_the_task_objective(tmp_path):
