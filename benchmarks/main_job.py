@@ -1,6 +1,6 @@
 """The README's main job over training seeds: run it, then collect its small result files.
 
-    neurosym pipeline task=two-groups-cross -m seed=0,1,2,3,4,5,6,7,8,9 runs_root=/tmp/mainjob   # about 5 min a seed
+    neurosym pipeline task=two-groups-cross -m seed=0,1,2,3,4,5,6,7,8,9 runs_root=/tmp/mainjob   # about 3 min a seed
     python benchmarks/main_job.py /tmp/mainjob                                         # docs/results/main-job/
 
 The defaults since issue 37 (the hybrid search, the degree-budget front and the pipeline's pick among it) make the
