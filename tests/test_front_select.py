@@ -163,6 +163,28 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
     assert picked["label"] in (exp / "stress/stress.csv").read_text()  # a verb of several baselines: det's pick too
 
 
+def test_a_det_prog_front_holding_random_rules_is_searched_again(tmp_path):
+    """A det-prog front searched before its chains started from an argmax silence held random rules: synth and the
+    pipeline do not reuse it (one line says why); an argmax-only front is reused as before."""
+    from neurosym_cli.synth.front import leaves_space
+
+    args = ["task=two-groups-cross", "budget=tiny", "threads=1"]
+    run(["train", *args], tmp_path)
+    run(["synth", *args, "baseline=det-prog"], tmp_path)
+    front = tmp_path / "two-groups-cross/tiny/seed0/synth/det-k2-lam0.5-v1-hybrid/front.json"
+    rec = json.loads(front.read_text())
+    assert not leaves_space(rec, det=True)
+    p = run(["synth", *args, "baseline=det-prog"], tmp_path)
+    assert "already synthesized" in p.stdout + p.stderr  # a front that fits is reused
+    rec["rounds"][0]["budgets"][-1]["program"] = "random(filter(true, l))\nrandom(filter(d <= 1.0, l))"
+    front.write_text(json.dumps(rec))
+    assert leaves_space(rec, det=True) and not leaves_space(rec, det=False)
+    p = run(["synth", *args, "baseline=det-prog"], tmp_path)
+    said = " ".join((p.stdout + p.stderr).split())
+    assert "holds random rules" in said and "searching again" in said
+    assert not leaves_space(json.loads(front.read_text()), det=True)
+
+
 def test_select_lam_grid_follows_the_task_objective(tmp_path):
     from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.stages.select import LAM_GRIDS, grid, lam_grid

@@ -24,7 +24,7 @@ from .front_select import PROG, SILENT_BASELINE, family_of, fronted, select_fron
 from .graph import Stage, plan, requires
 from .jobs import quiet_job
 from .results import print_table
-from .synth import collect_dataset, synthesize
+from .synth import collect_dataset, searched, synthesize
 from .tracked import track_files
 from .train import retrain, train
 
@@ -51,13 +51,12 @@ twentieth, an evaluation seed one and a half): what the time left assumes for a 
 def stage_units(cfg: RunConfig, stage: Stage) -> float:
     """The work of one stage of ``cfg``'s plan in its verb's units: training or retraining rollouts, search steps
     (all rounds), evaluation seeds; 0 for a stage whose artifact is there already (a finished training's manifest,
-    a search's summary: it is reused, unless overwrite=true; an evaluation always runs)."""
+    a finished search: stages/synth.searched; it is reused, unless overwrite=true; an evaluation always runs)."""
     b = cfg.budget
     try:
-        run = RunDir(cfg)
         if not cfg.overwrite and stage.verb != "eval" and \
-                (run.summary_file if stage.verb == "synth" else run.manifest_file).exists():
-            return 0.0  # (a training has no summary_file: asked only of a search); overwrite=true makes it again
+                (searched(cfg) if stage.verb == "synth" else RunDir(cfg).manifest_file.exists()):
+            return 0.0  # overwrite=true makes it again
     except (UserError, OSError):  # a program file not there yet: the stage will say so; count its work
         pass
     return {"train": b.train_rollouts, "retrain": b.retrain_rollouts, "synth": b.mcmc_steps * cfg.task.rounds,

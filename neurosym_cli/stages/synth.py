@@ -52,8 +52,10 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
                           "show-program")
     rd = RunDir(cfg)
     result = rd.artifact_file()
-    front_missing = cfg.synth.front and artifact.file == PROGRAM and not rd.front_file.exists()
-    if result.exists() and rd.summary_file.exists() and not cfg.overwrite and not front_missing:
+    if not cfg.overwrite and front_stale(cfg):
+        log.warning("the front %s holds random rules or is unreadable, though %s searches argmax rules only (a "
+                    "front searched before 2026-12-05): searching again", rd.front_file, cfg.baseline.name)
+    if not cfg.overwrite and searched(cfg):
         from ..run.models import scheme_provider
 
         scheme_provider(cfg)  # a corrupt result is an error, never "already done"
@@ -66,6 +68,30 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
         for f in (result, rd.summary_file, rd.trace_file, rd.front_file):
             tracker.artifact(f)
         return out
+
+
+def front_stale(cfg: RunConfig) -> bool:
+    """Whether ``cfg``'s search has a front that must be searched again: one holding programs outside the search's
+    space (synth/front.leaves_space), or unreadable."""
+    from ..synth.front import leaves_space
+
+    path = RunDir(cfg).front_file
+    if not (cfg.synth.front and cfg.baseline.artifact(cfg) and path.exists()):
+        return False
+    try:
+        return leaves_space(read_json(path), cfg.baseline.det)
+    except (UserError, KeyError, TypeError, AttributeError):
+        return True  # of another shape: searched again like a missing one
+
+
+def searched(cfg: RunConfig) -> bool:
+    """Whether the run directory holds ``cfg``'s search, reused unless overwrite=true: its result and summary and,
+    for a program under synth.front=true, a front that fits its search."""
+    artifact = cfg.baseline.artifact(cfg)
+    rd = RunDir(cfg)
+    if artifact is None or not (rd.artifact_file().exists() and rd.summary_file.exists()):
+        return False
+    return not (cfg.synth.front and artifact.file == PROGRAM) or (rd.front_file.exists() and not front_stale(cfg))
 
 
 def read_summary(cfg: RunConfig) -> dict:

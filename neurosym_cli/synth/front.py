@@ -93,6 +93,18 @@ def range_rows(scorer: CachedScorer, radii: tuple[float, ...], budgets: list[flo
     return rows
 
 
+def leaves_space(rec: dict, det: bool) -> bool:
+    """Whether a front.json's programs leave the space their search allows: a random rule in det-prog's (argmax
+    rules only). Fronts of det-prog searched before 2026-12-05 did: their chains started from a random silence."""
+    from ..dsl.parser import parse
+
+    if not det:
+        return False
+    rows = [row for r in rec.get("rounds", []) for key in ("budgets", "range") for row in r.get(key, [])]
+    return any(isinstance(rule, RandomRule) for row in rows for rnd in parse(row["program"] + "\n").rounds
+               for rule in rnd)
+
+
 class BudgetScorer:
     """The constrained objective of one budget, over a round's scorer: L1 / L1(silence) + PENALTY * relu(degree -
     budget); ``Score.l1`` and ``Score.degree`` stay the scorer's (action units, max in+out)."""
