@@ -5,7 +5,7 @@
     python benchmarks/front_margin.py --json docs/results/front-margin.json
 
 The defaults pick, among the front's programs retrained and validated, the lowest max in+out whose validation loss
-is within ``pipeline.margin`` (0.02) of the validation-best's (stages/front_select.py). Every candidate of a run
+is within ``pipeline.margin`` (0.01) of the validation-best's (stages/front_select.py). Every candidate of a run
 was retrained and validated already, so another margin's pick costs only its test evaluation: for each result file
 of docs/results/seeds-defaults/ (its run directory under outputs/beyond must still be there) this re-applies the
 rule (``front_select.pick``) at each margin to the validation rows the run recorded, evaluates each pick not yet
@@ -31,19 +31,23 @@ from benchmarks.results.files import METRICS, load_seeds, seed_variant  # noqa: 
 from neurosym_cli.stages.front_select import pick  # noqa: E402
 
 MARGINS = (0.02, 0.01, 0.005, 0.0, None)
-"""pipeline.margin values tried (0.02: the default; None: the paper's test, similar when the interval holds 0)"""
+"""pipeline.margin values tried (0.01: the default since 2026-12-05, 0.02 before; None: the paper's test, similar
+when the interval holds 0)"""
+PICKS = (("front_pick", "prog-retrained"), ("det_front_pick", "det-prog-retrained"))
+"""each family's front choice in a result file and the baseline its pick is evaluated as (det-prog's where the run
+made its own front)"""
 
 
-def candidate_rows(res: dict, cand: dict) -> list[dict]:
+def candidate_rows(res: dict, cand: dict, baseline: str = "prog-retrained") -> list[dict]:
     """A candidate's per-seed test rows, evaluated now if the run has not (its retrained model is reused): the run's
-    own command line (its task, budget, seed and config folder) as `neurosym eval` of prog-retrained under the
+    own command line (its task, budget, seed and config folder) as `neurosym eval` of ``baseline`` under the
     candidate's program."""
     cfg = res["front_pick"]["config"]
     path = Path(cfg["exp_dir"]) / "eval" / cand["label"] / "metrics.json"
     if not path.exists():
         args = [a for a in shlex.split(res["command"])[2:]
                 if not a.startswith(("baselines=", "plots=", "progress=", "runs_root="))]
-        cmd = [str(Path(sys.executable).parent / "neurosym"), "eval", *args, "baseline=prog-retrained",
+        cmd = [str(Path(sys.executable).parent / "neurosym"), "eval", *args, f"baseline={baseline}",
                f"program={cand['program_file']}", f"runs_root={cfg['runs_root']}", "plots=false", "progress=plain"]
         p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
         if p.returncode != 0 or not path.exists():
@@ -62,14 +66,15 @@ def as_baseline(label: str, rows: list[dict]) -> dict:
 
 
 def judge_paper(directory: Path):
-    """(task, seed, result, claims of a prog-retrained entry) for every paper task-seed: the paper's claims."""
+    """(task, seed, result, claims with some baselines' entries replaced) for every paper task-seed: the paper's
+    claims."""
     for task, runs in sorted(load_seeds(directory).items()):
         for r in sorted(runs, key=lambda r: r.seed):
             v = seed_variant(r)
 
-            def holds(entry: dict, v=v, task=task) -> dict:
+            def holds(entries: dict, v=v, task=task) -> dict:
                 return {c.name: bool(c.holds) for c in claims(task, dict(v, baselines=dict(v["baselines"],
-                                                                                          **{"prog-retrained": entry})))}
+                                                                                          **entries)))}
             yield task, r.seed, json.loads(Path(r.source).read_text()), holds
 
 
@@ -78,34 +83,43 @@ def judge_beyond(directory: Path):
     for f in sorted(directory.glob("*-seed*.json")):
         res = json.loads(f.read_text())
 
-        def holds(entry: dict, res=res) -> dict:
-            return verdict(dict(res, baselines=dict(res["baselines"], **{"prog-retrained": entry})))["holds"]
+        def holds(entries: dict, res=res) -> dict:
+            return verdict(dict(res, baselines=dict(res["baselines"], **entries)))["holds"]
         yield res["task"], res["seed"], res, holds
 
 
 def run(judged) -> list[dict]:
-    """One row per (task, training seed, margin): the pick, its validation and test figures, what holds."""
+    """One row per (task, training seed, margin): prog's pick (and det-prog's, where the run made its own front), its
+    validation and test figures, what holds with every pick made at that margin."""
     out = []
     for task, seed, res, holds in judged:
-        front = res.get("front_pick") or {}
-        cands = front.get("candidates") or []
-        if not cands:
+        fronts = {b: res.get(key) or {} for key, b in PICKS if (res.get(key) or {}).get("candidates")}
+        if "prog-retrained" not in fronts:
             continue
-        rows = [{"name": c["name"], "loss": c["loss"], "degree": c["degree"]} for c in cands]
-        by_name = {c["name"]: c for c in cands}
         for margin in MARGINS:
-            chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
-                                          margin=margin) if c.get("picked"))
-            cand = by_name[chosen["name"]]
-            tests = candidate_rows(res, cand)
-            entry = dict(as_baseline(cand["label"], tests), per_seed=tests)
-            out.append({"task": task, "seed": seed, "margin": margin, "pick": cand["name"],
-                        "val_loss": cand["loss_mean"], "val_degree": cand["degree"],
+            entries, picked = {}, {}
+            for baseline, front in fronts.items():
+                cands = front["candidates"]
+                rows = [{"name": c["name"], "loss": c["loss"], "degree": c["degree"]} for c in cands]
+                chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
+                                              margin=margin) if c.get("picked"))
+                cand = next(c for c in cands if c["name"] == chosen["name"])
+                tests = candidate_rows(res, cand, baseline)
+                entries[baseline] = dict(as_baseline(cand["label"], tests), per_seed=tests)
+                picked[baseline] = cand
+            mine, entry = picked["prog-retrained"], entries["prog-retrained"]
+            out.append({"task": task, "seed": seed, "margin": margin, "pick": mine["name"],
+                        "val_loss": mine["loss_mean"], "val_degree": mine["degree"],
                         "test_loss": entry["summary"]["cost"]["mean"],
                         "test_max_degree": entry["summary"]["max_degree"]["mean"],
-                        "holds": {k: bool(h) for k, h in holds(entry).items()}})
-            print(f"{task} seed {seed} margin {margin}: {cand['name']:6s} test loss {out[-1]['test_loss']:.3f} max "
-                  f"in+out {out[-1]['test_max_degree']:.2f}; fails: "
+                        **({"det_pick": picked["det-prog-retrained"]["name"],
+                            "det_test_loss": entries["det-prog-retrained"]["summary"]["cost"]["mean"],
+                            "det_test_max_out": entries["det-prog-retrained"]["summary"]["max_out"]["mean"]}
+                           if "det-prog-retrained" in picked else {}),
+                        "holds": {k: bool(h) for k, h in holds(entries).items()}})
+            print(f"{task} seed {seed} margin {margin}: {mine['name']:6s} test loss {out[-1]['test_loss']:.3f} max "
+                  f"in+out {out[-1]['test_max_degree']:.2f}"
+                  + (f"; det-prog {out[-1]['det_pick']}" if "det_pick" in out[-1] else "") + "; fails: "
                   + (", ".join(k for k, h in out[-1]["holds"].items() if not h) or "none"), flush=True)
     return out
 
