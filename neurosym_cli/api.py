@@ -107,8 +107,8 @@ def _selected(cfg: RunConfig) -> RunConfig:
 
 
 def _picked(cfg: RunConfig, verb: str) -> RunConfig:
-    """prog and prog-retrained under the pipeline's front pick when there is one and no program= is given, as the
-    command line does (stages/front_select.apply_front_pick)."""
+    """A program baseline (prog's or det-prog's family) under the pipeline's pick among its front when there is one
+    and no program= is given, as the command line does (stages/front_select.apply_front_pick)."""
     from .stages.front_select import apply_front_pick
 
     return apply_front_pick(cfg, verb)

@@ -44,7 +44,8 @@ def test_each_family_keeps_its_own_fronts_pick(tmp_path):
     det_pick, det_stale = "det-prog-retrained-file-det-k2-v1-b2-cccc-v1", "det-prog-retrained-k2-lam0.5-v1"
     pick = "prog-retrained-file-k2-v1-b1-bbbb-v1"
     for label, baseline, cost in [(det_pick, "det-prog-retrained", 7.5), (det_stale, "det-prog-retrained", 4.0),
-                                  ("det-prog-file-det-k2-v1-b2-cccc-v1", "det-prog", 9.5), (pick, "prog-retrained", 7.0),
+                                  ("det-prog-file-det-k2-v1-b2-cccc-v1", "det-prog", 9.5),
+                                  ("det-prog-k2-lam0.5-v1", "det-prog", 2.5), (pick, "prog-retrained", 7.0),
                                   ("prog-retrained-file-k2-v1-b2-dddd-v1", "prog-retrained", 3.0),
                                   ("tf-full", "tf-full", 6.0), ("no-comm", "no-comm", 8.0)]:
         _metrics(exp, label, baseline, cost)

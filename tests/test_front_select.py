@@ -161,6 +161,32 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
     run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "stress.baselines=[det-prog-retrained]",
          "stress.agents=[5]", "stress.failure=[0.0]", "stress.seeds=1", "plots=false"], tmp_path)
     assert picked["label"] in (exp / "stress/stress.csv").read_text()  # a verb of several baselines: det's pick too
+    front = exp / "synth/det-k2-lam0.5-v1-hybrid/front.json"
+    front.write_text(front.read_text() + " ")  # searched again since the choice: its SHA-1 differs
+    p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=det-prog-retrained"], tmp_path,
+            check=False)
+    assert p.returncode != 0 and "made among another front" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_which_families_the_pipeline_picks_for(tmp_path):
+    """pipeline.select=front picks for each listed family; program= is prog's family's alone; select=none: none."""
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.stages.front_select import DET, PROG, family_of, fronted, program_for
+
+    def cfg(*o):
+        return compose_config("pipeline", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", *o])
+
+    assert fronted(cfg()) == [PROG, DET]  # every baseline by default
+    assert fronted(cfg("baselines=[prog-retrained,no-comm]")) == [PROG]
+    assert fronted(cfg("baselines=[det-prog,tf-full]")) == [DET]
+    hand = tmp_path / "mine.txt"
+    hand.write_text("argmax(map(-1.0*d, filter(true, l)))\nargmax(map(-1.0*d, filter(true, l)))\n")
+    assert fronted(cfg(f"program={hand}")) == [DET]  # program= gives prog's family its program
+    assert fronted(cfg("pipeline.select=none")) == []
+    assert family_of("det-prog-retrained") is DET and family_of("prog") is PROG and family_of("dist") is None
+    given = cfg(f"program={hand}")
+    assert program_for(given, "prog-retrained") == str(hand) and program_for(given, "det-prog") == ""  # no pick yet
+    assert program_for(given, "tf-full") == ""
 
 
 def test_a_det_prog_front_holding_random_rules_is_searched_again(tmp_path):

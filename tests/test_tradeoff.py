@@ -1,5 +1,6 @@
 """The trade-off in the task's own units (synth.objective=scaled), the degree-budget front and the guard (issue 37)."""
 
+import json
 import math
 import random
 
@@ -195,6 +196,22 @@ def test_det_progs_front_holds_argmax_rules_only():
     for r in rows:
         assert "random(" not in r["program"] and r["program"].startswith("argmax("), r["program"]
     assert all(isinstance(rule, ArgMaxRule) for rule in silence("d", k, det=True))
+
+
+def test_a_det_front_that_does_not_parse_is_searched_again_not_a_traceback(tmp_path):
+    from neurosym_cli.commands.apps import compose_config
+    from neurosym_cli.run import RunDir
+    from neurosym_cli.stages.synth import front_stale
+
+    cfg = compose_config("synth", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", "baseline=det-prog"])
+    front = RunDir(cfg).front_file
+    front.parent.mkdir(parents=True)
+    front.write_text(json.dumps({"rounds": [{"budgets": [{"program": "argmax(map(d, filter(d <=, l)))"}]}]}))
+    assert front_stale(cfg)  # a program that does not parse: searched again
+    prog = compose_config("synth", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny"])
+    RunDir(prog).front_file.parent.mkdir(parents=True)
+    RunDir(prog).front_file.write_text("not json")
+    assert not front_stale(prog)  # prog's space holds every rule: only det-prog's fronts can leave it
 
 
 def test_a_planted_program_is_recovered_at_its_budget():

@@ -189,6 +189,10 @@ def front_program(cfg: RunConfig, fam: Family) -> Path | None:
     if not path.exists():
         raise UserError(f"the front choice {choice} names {path}, which is gone; run `neurosym pipeline "
                         f"{run_args(cfg)}` to write it again")
+    made_on = rec.get("front_sha1")  # the front it chose among (recorded since the choice file exists)
+    if made_on and rd.front_file.exists() and hashlib.sha1(rd.front_file.read_bytes()).hexdigest() != made_on:
+        raise UserError(f"the front choice {choice} was made among another front than {rd.front_file} (searched "
+                        f"again since); run `neurosym pipeline {run_args(cfg)}` to choose among it again")
     return path
 
 

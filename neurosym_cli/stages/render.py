@@ -113,8 +113,8 @@ def _records(cfg: RunConfig, names: list[str], episode: int,
     out = []
     for name in names:
         if (name, episode) not in memo:
-            b = _with_baseline(cfg, name)
             try:
+                b = _with_baseline(cfg, name)  # a family's pick may be gone: drawn without it, as a missing model
                 memo[name, episode] = (RunDir(b).label, record(b, episode)[0])
             except UserError as e:
                 log.info("figures: no %s here, drawn without it (%s)", name, e)

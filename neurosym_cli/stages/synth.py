@@ -71,16 +71,16 @@ def synthesize(cfg: RunConfig, info: RunInfo) -> dict:
 
 
 def front_stale(cfg: RunConfig) -> bool:
-    """Whether ``cfg``'s search has a front that must be searched again: one holding programs outside the search's
-    space (synth/front.leaves_space), or unreadable."""
+    """Whether ``cfg``'s search (det-prog's) has a front that must be searched again: one holding programs outside
+    its space (synth/front.leaves_space: random rules), or unreadable."""
     from ..synth.front import leaves_space
 
     path = RunDir(cfg).front_file
-    if not (cfg.synth.front and cfg.baseline.artifact(cfg) and path.exists()):
-        return False
+    if not (cfg.baseline.det and cfg.synth.front and cfg.baseline.artifact(cfg) and path.exists()):
+        return False  # only det-prog's space excludes what a front may hold
     try:
-        return leaves_space(read_json(path), cfg.baseline.det)
-    except (UserError, KeyError, TypeError, AttributeError):
+        return leaves_space(read_json(path), True)
+    except (UserError, KeyError, TypeError, AttributeError, ValueError):  # ValueError: a program that does not parse
         return True  # of another shape: searched again like a missing one
 
 
