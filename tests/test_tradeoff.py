@@ -212,6 +212,8 @@ def test_a_det_front_that_does_not_parse_is_searched_again_not_a_traceback(tmp_p
     RunDir(prog).front_file.parent.mkdir(parents=True)
     RunDir(prog).front_file.write_text("not json")
     assert not front_stale(prog)  # prog's space holds every rule: only det-prog's fronts can leave it
+    dt = compose_config("synth", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny", "baseline=dt"])
+    assert not front_stale(dt)  # a tree: no front, no det
 
 
 def test_a_planted_program_is_recovered_at_its_budget():

@@ -76,8 +76,8 @@ def front_stale(cfg: RunConfig) -> bool:
     from ..synth.front import leaves_space
 
     path = RunDir(cfg).front_file
-    if not (cfg.baseline.det and cfg.synth.front and cfg.baseline.artifact(cfg) and path.exists()):
-        return False  # only det-prog's space excludes what a front may hold
+    if not (getattr(cfg.baseline, "det", False) and cfg.synth.front and path.exists()):
+        return False  # only det-prog's space excludes what a front may hold (a tree's scheme has no det)
     try:
         return leaves_space(read_json(path), True)
     except (UserError, KeyError, TypeError, AttributeError, ValueError):  # ValueError: a program that does not parse
