@@ -161,6 +161,20 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
     run(["stress", "task=two-groups-cross", "budget=tiny", "threads=1", "stress.baselines=[det-prog-retrained]",
          "stress.agents=[5]", "stress.failure=[0.0]", "stress.seeds=1", "plots=false"], tmp_path)
     assert picked["label"] in (exp / "stress/stress.csv").read_text()  # a verb of several baselines: det's pick too
+    assert choice["reference"] is None  # prog's family did not choose: det-prog is read at its own best
+    run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "budget.val_seeds=3",
+         "baselines=[prog-retrained,det-prog-retrained,no-comm]"], tmp_path)  # now with the method's front beside it
+    prog = json.loads((exp / "select/front/k2-lam0.5-v1-hybrid.json").read_text())
+    choice = json.loads((exp / "select/front/det-k2-lam0.5-v1-hybrid.json").read_text())
+    ref = choice["reference"]  # det-prog's pick is read at prog's validation-best (appendix C: at a similar loss)
+    best = min((r for r in prog["candidates"] if not r["excluded"]), key=lambda r: r["loss_mean"])
+    assert ref["family"] == "prog" and ref["name"] == best["name"] and ref["loss"] == best["loss"]
+    det = [r for r in choice["candidates"] if not r["excluded"]]
+    chosen = next(r for r in det if r["picked"])
+    if ref["loss_mean"] < min(r["loss_mean"] for r in det):  # worse than the method: as close to it as the margin
+        assert chosen["similar"] or chosen["loss_mean"] == min(r["loss_mean"] for r in det)
+        assert all(r["degree"] >= chosen["degree"] for r in det if r["similar"])
+    assert "at the method's loss" in choice["rule"]
     front = exp / "synth/det-k2-lam0.5-v1-hybrid/front.json"
     front.write_text(front.read_text() + " ")  # searched again since the choice: its SHA-1 differs
     p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=det-prog-retrained"], tmp_path,

@@ -46,6 +46,29 @@ def test_equal_degrees_go_to_the_lower_loss_and_a_single_row_is_picked():
         choose([_row("a", a, 1.0), _row("b", [1.0], 1.0)])
 
 
+def test_a_reference_from_another_family_sets_the_loss_to_match():
+    """An ablation is read at the method's loss (front_select.Family.matches): the lowest degree within the margin of
+    the reference where it is better than the rows' own best; the closest row where none is; ignored where worse."""
+    from neurosym_cli.stages.front_select import pick
+    from neurosym_cli.stages.select import choose
+
+    base = [10.0, 11.0, 9.5, 10.5, 10.2, 9.8]
+    rows = [_row("dense", [x + 0.5 for x in base], 6.0), _row("mid", [x + 0.7 for x in base], 3.0),
+            _row("sparse", [x + 1.4 for x in base], 1.0)]
+    alone = choose(rows, margin=0.1)  # within 10 % of its own best (+0.9 of 10.7): the sparsest
+    assert [r["name"] for r in alone if r["picked"]] == ["sparse"]
+    matched = choose(rows, margin=0.1, reference=base)  # within 10 % of the reference: 'sparse' is 14 % above
+    assert [r["name"] for r in matched if r["picked"]] == ["mid"]
+    assert {r["name"]: r for r in matched}["dense"]["best"]  # its own best stays marked
+    strict = choose(rows, margin=0.001, reference=base)  # nothing within 0.1 % of it: the lowest loss
+    assert [r["name"] for r in strict if r["picked"]] == ["dense"] and not any(r["similar"] for r in strict)
+    worse = choose(rows, margin=0.1, reference=[x + 5.0 for x in base])  # a worse reference changes nothing
+    assert [(r["name"], r["similar"]) for r in worse] == [(r["name"], r["similar"]) for r in alone]
+    assert [r["name"] for r in pick(rows, helps=True, margin=0.1, reference=base) if r["picked"]] == ["mid"]
+    with pytest.raises(ValueError, match="different numbers of seeds"):
+        choose(rows, reference=base[:3])
+
+
 def test_validation_episodes_are_never_test_episodes():
     from neurosym_cli.tasks.random_cross import CrossConfig
     from neurosym_cli.tasks import make_task

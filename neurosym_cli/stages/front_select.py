@@ -18,8 +18,10 @@ front's budgets instead of a lambda grid; issue 37).
     5. the choice and every candidate's rows in select/front/<tag>.json; the pipeline then makes and evaluates prog
        and prog-retrained under the picked program, on the test seeds.
 
-det-prog (argmax rules only, appendix B's ablation of the method) goes through the same steps with its own front
-when det-prog or det-prog-retrained is listed (``Family``; its files det-<tag>...).
+det-prog (argmax rules only, appendix C's ablation of the method) goes through the same steps with its own front
+when det-prog or det-prog-retrained is listed (``Family``; its files det-<tag>...), after prog's: in step 4 its
+best is prog's validation-best where that is lower (``Family.matches``, ``reference``), so the ablation is read at
+the method's loss.
 """
 
 from __future__ import annotations
@@ -59,6 +61,9 @@ class Family:
 
     search: str
     retrained: str
+    matches: "Family | None" = None
+    """the family whose best validation loss this one's pick must match where its own best is worse: an ablation is
+    compared at the method's loss (appendix C: "a similar loss but worse out-degrees"), not at a loss of its own"""
 
     @property
     def runs(self) -> tuple[str, str]:
@@ -72,9 +77,9 @@ class Family:
 
 PROG = Family("prog", "prog-retrained")
 """the method (sections 3.3-3.5); program= is its family's alone"""
-DET = Family("det-prog", "det-prog-retrained")
-"""appendix B's ablation, the method without random rules: under pipeline.select=front it gets its own front and
-pick by the same rule, as under the paper's method it gets select's own pick (an ablation of the method as run)"""
+DET = Family("det-prog", "det-prog-retrained", matches=PROG)
+"""appendix C's ablation, the method without random rules: under pipeline.select=front it gets its own front and
+pick by the same rule, at the method's loss (``matches``), as under the paper's method it gets select's own pick"""
 FAMILIES = (PROG, DET)
 
 
@@ -97,18 +102,23 @@ RULE = ("retrained under each distinct program of the front, validated on budget
         "silent programs are no candidates when tf-full beats no-comm on validation (paired 95% interval of "
         "no-comm - tf-full above 0)")
 """the rule, as the choice file states it"""
+MATCHED = ("; the best is {family}'s validation-best candidate where its loss is lower (the ablation at the method's "
+           "loss); when no program is similar to it, the lowest mean loss")
+"""what the rule adds for a family that ``matches`` another"""
 
 # --------------------------------------------------------------------------------------------- the rule
-def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = None) -> list[dict[str, Any]]:
+def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = None,
+         reference: Sequence[float] | None = None) -> list[dict[str, Any]]:
     """The rule on validation rows (``name``, ``loss`` per validation seed, ``degree``: mean max in+out over them).
 
     Silent rows (degree below guard.SILENT) are left out when ``helps`` (unless every row is silent: then they stay,
-    and the guard's line follows). ``margin``: select.choose's equivalence margin (None: the paper's test). Returns
-    select.choose's annotated rows of the candidates (one ``picked``), then the left-out rows with ``excluded``
-    true."""
+    and the guard's line follows). ``margin``: select.choose's equivalence margin (None: the paper's test);
+    ``reference``: the loss per validation seed to match when it is lower than the rows' best (``reference_loss``).
+    Returns select.choose's annotated rows of the candidates (one ``picked``), then the left-out rows with
+    ``excluded`` true."""
     silent = [r for r in rows if r["degree"] < SILENT]
     keep = [r for r in rows if not (helps and r["degree"] < SILENT)] or list(rows)
-    chosen = choose(keep, margin=margin)
+    chosen = choose(keep, margin=margin, reference=reference)
     for r in chosen:
         r["excluded"] = False
     left = [dict(r, excluded=True, similar=None, picked=False) for r in silent if not any(r is k for k in keep)]
@@ -224,6 +234,30 @@ def program_for(cfg: RunConfig, name: str) -> str:
     return str(path) if path else ""
 
 
+def reference(cfg: RunConfig, fam: Family) -> dict[str, Any] | None:
+    """The validation-best candidate of the family ``fam`` matches (``Family.matches``), from its choice file, as
+    {family, choice, name, loss (per validation seed), loss_mean, degree}; None when ``fam`` matches none, or that family's
+    pipeline has not chosen among its current front (its choice file is absent or was made on another front: then
+    ``fam`` is read at its own best, said in one line)."""
+    if fam.matches is None:
+        return None
+    rd = RunDir(dataclasses.replace(cfg, baseline=get(fam.matches.search), program=""))
+    choice = rd.front_choice_file(rd.program_tag)
+    if not choice.exists():
+        return None
+    rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"candidates": list})
+    if not rd.front_file.exists() or hashlib.sha1(rd.front_file.read_bytes()).hexdigest() != rec.get("front_sha1"):
+        say(f"{fam.search}: {choice} was made on another front than {rd.front_file}; its pick is read at its own "
+            f"best, not at {fam.matches.search}'s")
+        return None
+    rows = [r for r in rec["candidates"] if not r.get("excluded")]
+    if not rows:
+        return None
+    best = min(rows, key=lambda r: r["loss_mean"])
+    return {"family": fam.matches.search, "choice": str(choice), "name": best["name"], "loss": best["loss"], "loss_mean": best["loss_mean"],
+            "degree": best["degree"]}
+
+
 # --------------------------------------------------------------------------------------------- the stage
 def validation(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, Any]:
     """``baseline``'s validation rows (stages/validation.py), under ``program`` (a file; "" for none)."""
@@ -278,8 +312,15 @@ def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job]
                      "label": v["label"], "program": cand["program"], "l1_on_d": cand["l1"],
                      "degree_on_d": cand["degree_on_d"], "loss": v["loss"], "degree": v["degree"],
                      "max_in": v["max_in"], "max_out": v["max_out"]})
-    ranked = pick(rows, helps=helps, margin=cfg.pipeline.margin)
+    ref = reference(cfg, fam)
+    if ref is not None and len(ref["loss"]) != len(rows[0]["loss"]):
+        ref = None  # validated on other seeds (budget.val_seeds changed since): not comparable
+    ranked = pick(rows, helps=helps, margin=cfg.pipeline.margin, reference=ref["loss"] if ref else None)
     chosen = next(r for r in ranked if r["picked"])
+    if ref is not None and ref["loss_mean"] < min(r["loss_mean"] for r in ranked if not r["excluded"]):
+        say(f"front selection {fam.search}: read at {ref['family']}'s validation-best ({ref['name']}, "
+            f"{ref['loss_mean']:.4g}): " + ("the lowest degree within pipeline.margin of it" if chosen["similar"]
+                                            else "none of its programs is within pipeline.margin of it, the best"))
     if helps and chosen["degree"] < SILENT:
         log.warning("every program of the front is silent on validation, though tf-full beats no-comm: the front "
                     "found no communicating program worth its degree; try synth.search=hybrid or more "
@@ -288,7 +329,8 @@ def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job]
         "command": "pipeline", "kind": "front-selection", "version": __version__, "task": cfg.task.name,
         "search": fam.search, "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
         "front_sha1": hashlib.sha1(rd.front_file.read_bytes()).hexdigest(), "val_seeds": cfg.budget.val_seeds,
-        "retrain_rollouts": cfg.budget.retrain_rollouts, "rule": RULE, "margin": cfg.pipeline.margin,
+        "retrain_rollouts": cfg.budget.retrain_rollouts, "margin": cfg.pipeline.margin,
+        "rule": RULE + (MATCHED.format(family=fam.matches.search) if fam.matches else ""), "reference": ref,
         "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
         "communication_helps": helps, "no_comm_minus_tf_full": [gap, gap_ci],
         "picked": {k: chosen[k] for k in ("name", "budget", "program_file", "label", "program", "degree",

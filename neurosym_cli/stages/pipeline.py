@@ -328,6 +328,8 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
             return path
 
         needs = (Stage("train", ORACLE).name, Stage("train", SILENT_BASELINE).name, Stage("synth", fam.search).name)
+        if fam.matches in fams:  # its pick is read at that family's validation-best
+            needs += (fam.matches.node,)
         nodes.insert(len(first), Node(fam.node, selection, needs))
     if jobs > 1:
         say(f"pipeline: {len(stages)} stages, up to {jobs} at once (pipeline.jobs; each its own process and thread)")

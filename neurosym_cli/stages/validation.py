@@ -17,7 +17,8 @@ DEGREE = "max_degree"
 """the degree the rule prefers lower: the paper's deg, max over agents of in- plus out-degree (eval's max deg)"""
 
 
-def choose(rows: Sequence[dict[str, Any]], *, margin: float | None = None) -> list[dict[str, Any]]:
+def choose(rows: Sequence[dict[str, Any]], *, margin: float | None = None,
+           reference: Sequence[float] | None = None) -> list[dict[str, Any]]:
     """The paper's rule on validation rows. Each row has ``name``, ``loss`` (per validation seed, the same seeds in
     the same order for every row) and ``degree`` (its mean over those seeds).
 
@@ -26,24 +27,32 @@ def choose(rows: Sequence[dict[str, Any]], *, margin: float | None = None) -> li
     lowest degree among the similar rows, the lower mean loss on a tie). ``similar``: without ``margin``, the
     interval contains 0 (the difference is not significant: the paper's appendix B); with it, an equivalence test,
     the interval's upper end is at most ``margin`` x |the best's mean loss| (a noisy row is no longer similar just
-    because its interval is wide)."""
+    because its interval is wide). ``reference``: losses per validation seed of a row from elsewhere (another
+    family's best) that is the best instead when its mean is lower; no row may be similar to it, and then the
+    lowest-loss row is picked."""
     if not rows:
         raise ValueError("nothing to choose from")
-    seeds = {len(r["loss"]) for r in rows}
+    seeds = {len(r["loss"]) for r in rows} | ({len(reference)} if reference is not None else set())
     if len(seeds) != 1:
         raise ValueError(f"rows are evaluated on different numbers of seeds: {sorted(seeds)}")
     out = [dict(r) for r in rows]
     for r in out:
         r["loss_mean"], r["loss_ci"] = mean_ci(r["loss"])
-    best = min(out, key=lambda r: r["loss_mean"])
+    own = min(out, key=lambda r: r["loss_mean"])
+    best = own["loss"]
+    if reference is not None and mean_ci(list(reference))[0] < own["loss_mean"]:
+        best = list(reference)
+    best_mean = mean_ci(best)[0]
     for r in out:
-        d = [a - b for a, b in zip(r["loss"], best["loss"])]
+        d = [a - b for a, b in zip(r["loss"], best)]
         r["diff"], r["diff_ci"] = mean_ci(d)
-        r["similar"] = r is best or (r["diff"] <= r["diff_ci"] if margin is None
-                                     else r["diff"] + r["diff_ci"] <= margin * abs(best["loss_mean"]))
-        r["best"] = r is best
+        r["similar"] = r["loss"] == best or (r["diff"] <= r["diff_ci"] if margin is None
+                                              else r["diff"] + r["diff_ci"] <= margin * abs(best_mean))
+        r["best"] = r is own
         r["picked"] = False
     out.sort(key=lambda r: (not r["similar"], r["degree"], r["loss_mean"]))
+    if not out[0]["similar"]:  # nothing as good as the reference: the closest
+        out.sort(key=lambda r: r["loss_mean"])
     out[0]["picked"] = True
     return out
 
