@@ -35,7 +35,7 @@ MARGINS = (0.02, 0.01, 0.005, 0.0, None)
 when the interval holds 0)"""
 PICKS = (("front_pick", "prog-retrained"), ("det_front_pick", "det-prog-retrained"))
 """each family's front choice in a result file and the baseline its pick is evaluated as (det-prog's where the run
-made its own front)"""
+made its own front: re-picked at prog's validation-best, as stages/front_select reads it)"""
 
 
 def candidate_rows(res: dict, cand: dict, baseline: str = "prog-retrained") -> list[dict]:
@@ -96,13 +96,16 @@ def run(judged) -> list[dict]:
         fronts = {b: res.get(key) or {} for key, b in PICKS if (res.get(key) or {}).get("candidates")}
         if "prog-retrained" not in fronts:
             continue
+        method = [c for c in fronts["prog-retrained"]["candidates"] if not c.get("excluded")]
+        best = min(method, key=lambda c: sum(c["loss"]) / len(c["loss"]))["loss"]  # det-prog's is read at it
         for margin in MARGINS:
             entries, picked = {}, {}
             for baseline, front in fronts.items():
                 cands = front["candidates"]
                 rows = [{"name": c["name"], "loss": c["loss"], "degree": c["degree"]} for c in cands]
                 chosen = next(c for c in pick([dict(x) for x in rows], helps=front["communication_helps"],
-                                              margin=margin) if c.get("picked"))
+                                              margin=margin, reference=None if baseline == "prog-retrained" else best)
+                              if c.get("picked"))
                 cand = next(c for c in cands if c["name"] == chosen["name"])
                 tests = candidate_rows(res, cand, baseline)
                 entries[baseline] = dict(as_baseline(cand["label"], tests), per_seed=tests)

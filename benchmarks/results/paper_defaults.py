@@ -166,7 +166,8 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
                     f"seeds both ran, {', '.join(map(str, common))}): " + "; ".join(cells) + ". Under the defaults "
                     "prog-retrained runs the lowest degree of the front whose validation loss is within "
                     "pipeline.margin of the best candidate's, det-prog-retrained the same among its own front (argmax "
-                    "rules only), where the run made one."]
+                    "rules only), where the run made one, with prog's validation-best as the best where it is lower "
+                    "(the ablation at the method's loss, docs/fidelity.md) in the runs that recorded it."]
             out += ["", "Per seed, where the defaults lose a claim the paper's method holds there:", "",
                     *lost_on(task, runs, per_default, per_method, digits)]
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",
