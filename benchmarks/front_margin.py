@@ -98,6 +98,8 @@ def run(judged) -> list[dict]:
             continue
         method = [c for c in fronts["prog-retrained"]["candidates"] if not c.get("excluded")]
         best = min(method, key=lambda c: sum(c["loss"]) / len(c["loss"]))["loss"]  # det-prog's is read at it
+        if any(len(c["loss"]) != len(best) for f in fronts.values() for c in f["candidates"]):
+            sys.exit(f"front_margin: {task} seed {seed}: the fronts were validated on different numbers of seeds")
         for margin in MARGINS:
             entries, picked = {}, {}
             for baseline, front in fronts.items():

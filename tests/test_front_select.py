@@ -140,7 +140,11 @@ def test_tiny_pipeline_writes_the_choice_and_runs_prog_retrained_under_it(tmp_pa
 def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_path):
     """det-prog is the method without random rules (appendix B): under pipeline.select=front it is searched with a
     front, retrained and validated per candidate and run under its own pick, which later verbs follow too."""
+    import dataclasses
+
+    from neurosym_cli.commands.apps import compose_config
     from neurosym_cli.dsl.parser import parse
+    from neurosym_cli.stages.front_select import DET, PROG, pick, reference
     from neurosym_cli.stages.results import collect
 
     p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "budget.val_seeds=3",
@@ -162,8 +166,10 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
          "stress.agents=[5]", "stress.failure=[0.0]", "stress.seeds=1", "plots=false"], tmp_path)
     assert picked["label"] in (exp / "stress/stress.csv").read_text()  # a verb of several baselines: det's pick too
     assert choice["reference"] is None  # prog's family did not choose: det-prog is read at its own best
-    run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "budget.val_seeds=3",
-         "baselines=[prog-retrained,det-prog-retrained,no-comm]"], tmp_path)  # now with the method's front beside it
+    p = run(["pipeline", "task=two-groups-cross", "budget=tiny", "threads=1", "budget.val_seeds=3",
+             "baselines=[prog-retrained,det-prog-retrained,no-comm]"], tmp_path)  # now with the method's front too
+    out = p.stdout.replace("\n", " ")
+    assert out.index("front selection: prog:") < out.index("front selection: det-prog:")  # det's pick waits
     prog = json.loads((exp / "select/front/k2-lam0.5-v1-hybrid.json").read_text())
     choice = json.loads((exp / "select/front/det-k2-lam0.5-v1-hybrid.json").read_text())
     ref = choice["reference"]  # det-prog's pick is read at prog's validation-best (appendix C: at a similar loss)
@@ -171,10 +177,23 @@ def test_det_prog_gets_its_own_front_of_argmax_programs_and_its_own_pick(tmp_pat
     assert ref["family"] == "prog" and ref["name"] == best["name"] and ref["loss"] == best["loss"]
     det = [r for r in choice["candidates"] if not r["excluded"]]
     chosen = next(r for r in det if r["picked"])
-    if ref["loss_mean"] < min(r["loss_mean"] for r in det):  # worse than the method: as close to it as the margin
+    alone = next(r for r in pick([{k: r[k] for k in ("name", "loss", "degree")} for r in choice["candidates"]],
+                                 helps=choice["communication_helps"], margin=choice["margin"]) if r["picked"])
+    assert choice["reference_used"] == (ref["loss_mean"] < min(r["loss_mean"] for r in det))
+    if choice["reference_used"]:  # worse than the method: the lowest degree as close to it as the margin
         assert chosen["similar"] or chosen["loss_mean"] == min(r["loss_mean"] for r in det)
         assert all(r["degree"] >= chosen["degree"] for r in det if r["similar"])
+        assert chosen["degree"] >= alone["degree"]  # a lower loss to reach: never a sparser pick than its own
+    else:  # its own best is the better: the rule as without a reference
+        assert chosen["name"] == alone["name"]
     assert "at the method's loss" in choice["rule"]
+    cfg = compose_config("pipeline", [f"runs_root={tmp_path}", "task=two-groups-cross", "budget=tiny",
+                                      "budget.val_seeds=3"])
+    assert reference(cfg, DET)["name"] == best["name"] and reference(cfg, PROG) is None  # prog matches none
+    assert reference(dataclasses.replace(cfg, budget=dataclasses.replace(cfg.budget, val_seeds=4)), DET) is None
+    prog_front = exp / "synth/k2-lam0.5-v1-hybrid/front.json"
+    prog_front.write_text(prog_front.read_text() + " ")  # searched again since prog chose: no reference
+    assert reference(cfg, DET) is None
     front = exp / "synth/det-k2-lam0.5-v1-hybrid/front.json"
     front.write_text(front.read_text() + " ")  # searched again since the choice: its SHA-1 differs
     p = run(["eval", "task=two-groups-cross", "budget=tiny", "threads=1", "baseline=det-prog-retrained"], tmp_path,

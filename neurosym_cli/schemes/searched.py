@@ -192,7 +192,7 @@ class Program(Searched):
     """prog, det-prog: the oracle under the synthesized program's hard attention (section 3.3)."""
 
     det: bool = False
-    """no random rules (det-prog, paper appendix B)"""
+    """no random rules (det-prog, paper appendix C)"""
 
     has_program = True
 

@@ -74,6 +74,11 @@ class Family:
         """the key of its front selection in the pipeline's graph"""
         return f"front selection {self.search}"
 
+    @property
+    def retrained_node(self) -> str:
+        """the key of its front's retrainings and validations in the pipeline's graph (before the pick)"""
+        return f"front retraining {self.search}"
+
 
 PROG = Family("prog", "prog-retrained")
 """the method (sections 3.3-3.5); program= is its family's alone"""
@@ -113,7 +118,7 @@ def pick(rows: Sequence[dict[str, Any]], *, helps: bool, margin: float | None = 
 
     Silent rows (degree below guard.SILENT) are left out when ``helps`` (unless every row is silent: then they stay,
     and the guard's line follows). ``margin``: select.choose's equivalence margin (None: the paper's test);
-    ``reference``: the loss per validation seed to match when it is lower than the rows' best (``reference_loss``).
+    ``reference``: the loss per validation seed to match where it is lower than the rows' best (``reference``).
     Returns select.choose's annotated rows of the candidates (one ``picked``), then the left-out rows with
     ``excluded`` true."""
     silent = [r for r in rows if r["degree"] < SILENT]
@@ -235,27 +240,27 @@ def program_for(cfg: RunConfig, name: str) -> str:
 
 
 def reference(cfg: RunConfig, fam: Family) -> dict[str, Any] | None:
-    """The validation-best candidate of the family ``fam`` matches (``Family.matches``), from its choice file, as
-    {family, choice, name, loss (per validation seed), loss_mean, degree}; None when ``fam`` matches none, or that family's
-    pipeline has not chosen among its current front (its choice file is absent or was made on another front: then
-    ``fam`` is read at its own best, said in one line)."""
-    if fam.matches is None:
+    """The validation-best candidate of the family ``fam`` matches (``Family.matches``), from the choice file the
+    same pipeline just wrote for it, as {family, choice, name, loss (per validation seed), loss_mean, degree}; None
+    (said in one line) when that choice is absent, was made on another front or on another number of validation
+    seeds, or holds no candidate."""
+    other = fam.matches
+    if other is None:
         return None
-    rd = RunDir(dataclasses.replace(cfg, baseline=get(fam.matches.search), program=""))
+    rd = RunDir(dataclasses.replace(cfg, baseline=get(other.search), program=""))
     choice = rd.front_choice_file(rd.program_tag)
-    if not choice.exists():
-        return None
-    rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"candidates": list})
-    if not rd.front_file.exists() or hashlib.sha1(rd.front_file.read_bytes()).hexdigest() != rec.get("front_sha1"):
-        say(f"{fam.search}: {choice} was made on another front than {rd.front_file}; its pick is read at its own "
-            f"best, not at {fam.matches.search}'s")
-        return None
-    rows = [r for r in rec["candidates"] if not r.get("excluded")]
-    if not rows:
+    rec = read_json(choice, f"neurosym pipeline {run_args(cfg)}", {"candidates": list}) if choice.exists() else {}
+    sha = hashlib.sha1(rd.front_file.read_bytes()).hexdigest() if rd.front_file.exists() else None
+    rows = [r for r in rec.get("candidates", []) if not r.get("excluded")]
+    why = ("no choice" if not rec else "another front" if rec.get("front_sha1") != sha
+           else "other validation seeds" if rec.get("val_seeds") != cfg.budget.val_seeds else "" if rows
+           else "no candidate")
+    if why:
+        say(f"{fam.search}: read at its own validation-best, not at {other.search}'s ({choice}: {why})")
         return None
     best = min(rows, key=lambda r: r["loss_mean"])
-    return {"family": fam.matches.search, "choice": str(choice), "name": best["name"], "loss": best["loss"], "loss_mean": best["loss_mean"],
-            "degree": best["degree"]}
+    return {"family": other.search, "choice": str(choice), "name": best["name"], "loss": best["loss"],
+            "loss_mean": best["loss_mean"], "degree": best["degree"]}
 
 
 # --------------------------------------------------------------------------------------------- the stage
@@ -264,13 +269,29 @@ def validation(cfg: RunConfig, baseline: str, program: str = "") -> dict[str, An
     return validate(dataclasses.replace(cfg, baseline=get(baseline), cmd="eval", program=program))
 
 
-def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job],
-                 validate_job: Callable[[str, str], Job],
-                 on_candidates: Callable[[list[str]], None] | None = None) -> Flow:
-    """Steps 2-5 of the module docstring for ``fam``'s front, as a flow (stages/flow.py) that starts once step 1's
-    artifacts are made; its value is the picked program's file. ``retrain(baseline, program)``: the job that
-    retrains ``baseline`` under a program file (the pipeline's stage); ``validate_job(baseline, program)``: the job
-    of ``validation``; ``on_candidates``: told the program files about to be retrained (the pipeline's time left)."""
+@dataclasses.dataclass
+class Validated:
+    """A family's front, retrained and validated (steps 2-3): its candidates' validation ``rows``, tf-full's and
+    no-comm's rows, whether communication helps (and no-comm - tf-full, its 95 % half-width), the search's run
+    directory and tag, and when the work started (time.perf_counter)."""
+
+    rows: list[dict[str, Any]]
+    tf: dict[str, Any]
+    nc: dict[str, Any]
+    helps: bool
+    gap: tuple[float, float]
+    rd: RunDir
+    tag: str
+    t0: float
+
+
+def validated_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job],
+                    validate_job: Callable[[str, str], Job],
+                    on_candidates: Callable[[list[str]], None] | None = None) -> Flow:
+    """Steps 2-3 of the module docstring for ``fam``'s front, as a flow (stages/flow.py) that starts once step 1's
+    artifacts are made; its value is a ``Validated``. ``retrain(baseline, program)``: the job that retrains
+    ``baseline`` under a program file (the pipeline's stage); ``validate_job(baseline, program)``: the job of
+    ``validation``; ``on_candidates``: told the program files about to be retrained (the pipeline's time left)."""
     t0 = time.perf_counter()
     search = dataclasses.replace(cfg, baseline=get(fam.search), program="")
     rd = RunDir(search)
@@ -312,16 +333,23 @@ def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job]
                      "label": v["label"], "program": cand["program"], "l1_on_d": cand["l1"],
                      "degree_on_d": cand["degree_on_d"], "loss": v["loss"], "degree": v["degree"],
                      "max_in": v["max_in"], "max_out": v["max_out"]})
-    ref = reference(cfg, fam)
-    if ref is not None and len(ref["loss"]) != len(rows[0]["loss"]):
-        ref = None  # validated on other seeds (budget.val_seeds changed since): not comparable
-    ranked = pick(rows, helps=helps, margin=cfg.pipeline.margin, reference=ref["loss"] if ref else None)
+    return Validated(rows, tf, nc, helps, (gap, gap_ci), rd, tag, t0)
+
+
+def choose_front(cfg: RunConfig, fam: Family, front: Validated, matched: bool = False) -> Path:
+    """Steps 4-5 of the module docstring: the pick among ``front`` by the rule, written to the choice file; its
+    program file. ``matched``: the pipeline chose among ``fam.matches``'s front first, and ``fam`` is read at its
+    validation-best (``reference``) where that is lower than ``fam``'s own."""
+    rd, tag, rows = front.rd, front.tag, front.rows
+    ref = reference(cfg, fam) if matched else None
+    ranked = pick(rows, helps=front.helps, margin=cfg.pipeline.margin, reference=ref["loss"] if ref else None)
     chosen = next(r for r in ranked if r["picked"])
-    if ref is not None and ref["loss_mean"] < min(r["loss_mean"] for r in ranked if not r["excluded"]):
+    used = ref is not None and ref["loss_mean"] < min(r["loss_mean"] for r in ranked if not r["excluded"])
+    if ref is not None and used:
         say(f"front selection {fam.search}: read at {ref['family']}'s validation-best ({ref['name']}, "
-            f"{ref['loss_mean']:.4g}): " + ("the lowest degree within pipeline.margin of it" if chosen["similar"]
-                                            else "none of its programs is within pipeline.margin of it, the best"))
-    if helps and chosen["degree"] < SILENT:
+            f"{ref['loss_mean']:.4g}): " + ("the lowest degree similar to it" if chosen["similar"]
+                                            else "none of its programs is similar to it, its lowest loss"))
+    if front.helps and chosen["degree"] < SILENT:
         log.warning("every program of the front is silent on validation, though tf-full beats no-comm: the front "
                     "found no communicating program worth its degree; try synth.search=hybrid or more "
                     "budget.mcmc_steps")
@@ -330,13 +358,14 @@ def select_front(cfg: RunConfig, fam: Family, retrain: Callable[[str, str], Job]
         "search": fam.search, "seed": cfg.seed, "budget": cfg.budget.name, "tag": tag, "front": str(rd.front_file),
         "front_sha1": hashlib.sha1(rd.front_file.read_bytes()).hexdigest(), "val_seeds": cfg.budget.val_seeds,
         "retrain_rollouts": cfg.budget.retrain_rollouts, "margin": cfg.pipeline.margin,
-        "rule": RULE + (MATCHED.format(family=fam.matches.search) if fam.matches else ""), "reference": ref,
-        "tf_full": {"loss": tf["loss"], "degree": tf["degree"]}, "no_comm": {"loss": nc["loss"]},
-        "communication_helps": helps, "no_comm_minus_tf_full": [gap, gap_ci],
+        "rule": RULE + (MATCHED.format(family=fam.matches.search) if fam.matches else ""),
+        "reference": ref, "reference_used": used,
+        "tf_full": {"loss": front.tf["loss"], "degree": front.tf["degree"]}, "no_comm": {"loss": front.nc["loss"]},
+        "communication_helps": front.helps, "no_comm_minus_tf_full": list(front.gap),
         "picked": {k: chosen[k] for k in ("name", "budget", "program_file", "label", "program", "degree",
                                            "loss_mean")},
-        "candidates": ranked, "seconds": time.perf_counter() - t0, "config": cfg.record()})
-    say(f"[green]front selection[/]: {about(chosen)}, validation loss {chosen['loss_mean']:.4g}, max "
-        f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - t0)}); "
+        "candidates": ranked, "seconds": time.perf_counter() - front.t0, "config": cfg.record()})
+    say(f"[green]front selection[/]: {fam.search}: {about(chosen)}, validation loss {chosen['loss_mean']:.4g}, max "
+        f"in+out {chosen['degree']:.2f} -> {rd.front_choice_file(tag)} ({clock(time.perf_counter() - front.t0)}); "
         f"{fam.search} and {fam.retrained} run under it")
     return Path(chosen["program_file"])

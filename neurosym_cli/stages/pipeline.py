@@ -20,7 +20,8 @@ from ..utils.io import read_json, write_json
 from . import RunInfo
 from .evaluate import evaluate_baseline
 from .flow import Flow, Job, Node, Worker, one, run_flow
-from .front_select import PROG, SILENT_BASELINE, family_of, fronted, select_front, validation
+from .front_select import (PROG, SILENT_BASELINE, Validated, choose_front, family_of, fronted, validated_front,
+                           validation)
 from .graph import Stage, plan, requires
 from .jobs import quiet_job
 from .results import print_table
@@ -320,17 +321,23 @@ def run_pipeline(cfg: RunConfig, info: RunInfo) -> dict:
                                      tuple(w.name for w in waits(s, stages)))
             datasets.setdefault(key, Node(key, lambda: iter(())))  # nothing to collect: done at once
     nodes[len(first):len(first)] = list(datasets.values())
+    validated: dict[str, Validated] = {}  # each family's front, retrained and validated
     for fam in reversed(fams):
+        def retrained(fam=fam) -> Flow:
+            validated[fam.search] = yield from validated_front(cfg, fam, retrain_job, validate_job,
+                                                               candidates[fam.search].extend)
+
         def selection(fam=fam) -> Flow:
-            path = yield from select_front(cfg, fam, retrain_job, validate_job, candidates[fam.search].extend)
+            yield []  # no job: the pick is made in this process
+            path = choose_front(cfg, fam, validated[fam.search], matched=fam.matches in fams)
             chosen[fam.search] = str(path)
             done_names.add(fam.node)
             return path
 
         needs = (Stage("train", ORACLE).name, Stage("train", SILENT_BASELINE).name, Stage("synth", fam.search).name)
-        if fam.matches in fams:  # its pick is read at that family's validation-best
-            needs += (fam.matches.node,)
-        nodes.insert(len(first), Node(fam.node, selection, needs))
+        # its pick, not its retrainings, waits for the family it is read against (Family.matches)
+        picks = (fam.retrained_node,) + ((fam.matches.node,) if fam.matches in fams else ())
+        nodes[len(first):len(first)] = [Node(fam.retrained_node, retrained, needs), Node(fam.node, selection, picks)]
     if jobs > 1:
         say(f"pipeline: {len(stages)} stages, up to {jobs} at once (pipeline.jobs; each its own process and thread)")
     values = run_flow(nodes, jobs, worker=Worker.like_this_process(cfg), on_result=record)

@@ -23,13 +23,14 @@ def choose(rows: Sequence[dict[str, Any]], *, margin: float | None = None,
     the same order for every row) and ``degree`` (its mean over those seeds).
 
     Returns the rows annotated, ordered by (not similar, degree, loss): ``loss_mean``, ``loss_ci``, ``diff`` (mean
-    paired difference to the validation-best), ``diff_ci`` (its 95 % half-width), ``similar`` and ``picked`` (the
-    lowest degree among the similar rows, the lower mean loss on a tie). ``similar``: without ``margin``, the
-    interval contains 0 (the difference is not significant: the paper's appendix B); with it, an equivalence test,
-    the interval's upper end is at most ``margin`` x |the best's mean loss| (a noisy row is no longer similar just
-    because its interval is wide). ``reference``: losses per validation seed of a row from elsewhere (another
-    family's best) that is the best instead when its mean is lower; no row may be similar to it, and then the
-    lowest-loss row is picked."""
+    paired difference to the best), ``diff_ci`` (its 95 % half-width), ``similar``, ``best`` (the rows' own
+    validation-best) and ``picked`` (the lowest degree among the similar rows, the lower mean loss on a tie).
+    ``similar``: without ``margin``, the interval contains 0 (the difference is not significant: the paper's appendix
+    B); with it, an equivalence test, the interval's upper end is at most ``margin`` x |the best's mean loss| (a noisy
+    row is no longer similar just because its interval is wide). The best is the rows' own validation-best, or
+    ``reference`` (losses per validation seed of a row from elsewhere: another family's best) where its mean is
+    lower; then no row may be similar (two families' models rarely tie within the paper's test), and the rows are
+    ordered by mean loss, the lowest picked."""
     if not rows:
         raise ValueError("nothing to choose from")
     seeds = {len(r["loss"]) for r in rows} | ({len(reference)} if reference is not None else set())
