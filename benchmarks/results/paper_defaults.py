@@ -117,6 +117,19 @@ def _rules(program: str, task: str, run) -> str:
         f"round {k}: {'; '.join(rules)}." for k, rules in enumerate(rounds, start=1))
 
 
+def _matched(choice: dict) -> str:
+    """How a choice was read against another family's validation-best (front_select.Family.matches), in words: ""
+    where it was not (prog's own choices, runs before it, or its own best the lower)."""
+    ref = choice.get("reference")
+    own = [c for c in choice.get("candidates", []) if not c.get("excluded")]
+    if not ref or not own or ref["loss_mean"] >= min(c["loss_mean"] for c in own):
+        return ""
+    picked = next(c for c in own if c.get("picked"))
+    return (f" (read at {ref['family']}'s validation-best, {ref['name']} at {ref['loss_mean']:.4g}: "
+            + ("the lowest degree within the margin of it)" if picked.get("similar") else
+               f"none within the margin of it, its lowest validation loss, {picked['loss_mean']:.4g})"))
+
+
 def paper_defaults(directory: Path = DEFAULTS) -> str:
     """Per paper task: the training seeds each method ran, the picks under the defaults, and one row per claim:
     on how many seeds it holds under the paper's method (its model selection) and under the defaults, with the
@@ -136,7 +149,8 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
             for key, who in (("front_pick", ""), ("det_front_pick", "det-prog, ")):  # prog's, then det-prog's
                 pick = (res.get(key) or {}).get("picked") or {}
                 if pick:
-                    picks.append(f"- seed {r.seed}, {who}{about(pick)}: `{_rules(pick['program'], task, r)}`")
+                    picks.append(f"- seed {r.seed}, {who}{about(pick)}{_matched(res.get(key))}: "
+                                 f"`{_rules(pick['program'], task, r)}`")
         names, per_default = seed_claims(task, runs)
         _, per_method = seed_claims(task, method.get(task, []))
         digits = 3 if task == "unlabeled-goals" else 2
@@ -167,7 +181,7 @@ def paper_defaults(directory: Path = DEFAULTS) -> str:
                     "prog-retrained runs the lowest degree of the front whose validation loss is within "
                     "pipeline.margin of the best candidate's, det-prog-retrained the same among its own front (argmax "
                     "rules only), where the run made one, with prog's validation-best as the best where it is lower "
-                    "(the ablation at the method's loss, docs/fidelity.md) in the runs that recorded it."]
+                    "(the ablation at the method's loss, docs/fidelity.md; said with each pick below)."]
             out += ["", "Per seed, where the defaults lose a claim the paper's method holds there:", "",
                     *lost_on(task, runs, per_default, per_method, digits)]
         out += ["", "The programs the defaults picked (the front's candidate, then its rules, shown simplified):", "",
