@@ -38,14 +38,17 @@ def lost_on(task: str, runs: list, per_default: dict, per_method: dict, digits: 
         if isinstance(mine, str) or isinstance(theirs, str) or not mine or not theirs:
             continue
         held = {c.name for c in theirs if c.holds}
-        gone = [c.name for c in mine if not c.holds and c.name in held]
+        gone = [c for c in mine if not c.holds and c.name in held]
         if not gone:
             continue
         res = json.loads(Path(r.source).read_text())
         base = seed_variant(r)["baselines"]
-        loss = {b: base[b]["summary"]["cost"]["mean"] for b in ("prog-retrained", "tf-full") if b in base}
-        line = f"- seed {r.seed}: {'; '.join(gone)}."
-        if len(loss) == 2:
+        loss = {b: base[b]["summary"]["cost"]["mean"] for b in ("prog-retrained", "tf-full", "det-prog-retrained")
+                if b in base}
+        line = f"- seed {r.seed}: {'; '.join(c.long for c in gone)}."
+        if any("det-prog-retrained" in c.name for c in gone) and "det-prog-retrained" in loss:
+            line += f" det-prog-retrained's test loss {loss['det-prog-retrained']:.{digits}f}."
+        if "prog-retrained" in loss and "tf-full" in loss:
             line += (f" prog-retrained {loss['prog-retrained']:.{digits}f} against tf-full {loss['tf-full']:.{digits}f}"
                      f" ({100 * (loss['prog-retrained'] / loss['tf-full'] - 1):+.1f} %)"
                      + (f" and dist {base['dist']['summary']['cost']['mean']:.{digits}f}" if "dist" in base else "")
