@@ -26,6 +26,8 @@ PROGRAMS = {
         "random(filter((theta >= 0.5 and d <= 2.0) or (gd >= 1.0 and dy <= -0.2), l))\n"
         "argmax(map(1.0*gx, filter(d >= 1000.0, l)))",  # a filter that passes nobody, a score that ties
         "argmax(map(1.0*gd - 2.0*theta, filter(gd + theta >= 0.7, l)))\nargmax(map(-1.0*dy, filter(gd >= 1e9, l)))",
+        # random rules over filters that pass few (the cell scan's winners struck out until it reads every cell)
+        "random(filter(d <= 1.5 and theta >= 1.0, l))\nrandom(filter(-1.0*d >= -0.8, l))",
     ],
     "v2": [
         "argmax(map(1.0*gx_dx, filter(gy_dy >= 0.5, l)))\nrandom(filter(gd >= 3.0, l))",
@@ -43,26 +45,50 @@ def _picks(env, program, version, state, seed, fused, monkeypatch):
     return comm.picks(CommContext(env, state, obs, rng), 0)
 
 
+@pytest.mark.parametrize("cells", [False, True], ids=["every-pair", "by-cells"])
 @pytest.mark.parametrize("noise", [0.0, 0.1])
 @pytest.mark.parametrize("version", ["v1", "v2"])
-def test_the_fused_scan_gives_the_reference_picks_bit_for_bit(version, noise, monkeypatch):
+def test_the_fused_scan_gives_the_reference_picks_bit_for_bit(version, noise, cells, monkeypatch):
+    """Both fused kernels: every pair computed (scan_kernels) and decided by cells (scan_cells, forced on here at
+    40 agents, where its cells hold a few agents each)."""
+    monkeypatch.setattr(scan, "CELLS_FROM", 0 if cells else 10 ** 9)
     env = RandomCrossTask(CrossConfig(name="random-cross", group_prob=1.0, sparse_from=0, noise_std=noise))
-    state = env.reset(3, torch.Generator().manual_seed(0))[0]
-    for text in PROGRAMS[version]:
+    for seed in range(3):
+        state = env.reset(3, torch.Generator().manual_seed(seed))[0]
+        for text in PROGRAMS[version]:
+            program = parse(text)
+            assert scan.compile_round(program, 0, env.features(version)) is not None, text
+            fused = _picks(env, program, version, state, 7 + seed, True, monkeypatch)
+            ref = _picks(env, program, version, state, 7 + seed, False, monkeypatch)
+            assert fused.shape == (3, 40, program.max_rules)
+            assert torch.equal(fused, ref), text
+            if text.startswith("random(filter((theta"):  # a filter that passes nobody (-1), ties under a constant
+                assert (fused[..., 1] == -1).all()
+            if text.startswith("random(filter(d <= 1.5"):
+                assert (fused >= 0).any() and (fused == -1).any()  # some pass, some pass nobody
+
+
+def test_the_cell_scan_gives_the_every_pair_picks_on_a_large_swarm(monkeypatch):
+    """600 agents in about 50 cells: the cells' bounds decide most pairs, and the picks stay the every-pair kernel's
+    (itself the reference's, above), for every program of the suite that the swarm's features serve."""
+    from neurosym_cli.tasks.swarm import SwarmConfig, SwarmTask
+
+    env = SwarmTask(SwarmConfig(name="swarm", agents_per_group=300))
+    state = env.reset(2, torch.Generator().manual_seed(1))[0]
+    for text in PROGRAMS["v1"]:
         program = parse(text)
-        assert scan.compile_round(program, 0, env.features(version)) is not None, text
-        fused = _picks(env, program, version, state, 7, True, monkeypatch)
-        ref = _picks(env, program, version, state, 7, False, monkeypatch)
-        assert fused.shape == (3, 40, program.max_rules)
-        assert torch.equal(fused, ref), text
-    # the last v1 programs reach the edge cases: a filter that passes nobody (-1) and ties under a constant score
-    if version == "v1":
-        assert (fused[..., 1] == -1).all()
+        got = {}
+        for cells in (True, False):
+            monkeypatch.setattr(scan, "CELLS_FROM", 0 if cells else 10 ** 9)
+            got[cells] = _picks(env, program, "v1", state, 3, True, monkeypatch)
+        assert torch.equal(got[True], got[False]), text
 
 
-def test_close_calls_on_the_angle_are_decided_by_the_exact_angle(monkeypatch):
+@pytest.mark.parametrize("cells", [False, True], ids=["every-pair", "by-cells"])
+def test_close_calls_on_the_angle_are_decided_by_the_exact_angle(cells, monkeypatch):
     """Thresholds set to pairs' exact bearings (float32 atan2, as the reference computes them): the fast angle is
     below the threshold for some of them, and the picks still equal the reference's."""
+    monkeypatch.setattr(scan, "CELLS_FROM", 0 if cells else 10 ** 9)
     env = RandomCrossTask(CrossConfig(name="random-cross", group_prob=1.0, sparse_from=0, noise_std=0.1))
     state = env.reset(2, torch.Generator().manual_seed(3))[0]
     rng = Rng([torch.Generator().manual_seed(11 + e) for e in range(2)])

@@ -37,6 +37,8 @@ MAX_WEIGHT = 1e15
 """the largest score weight the fused kernel takes (bounded features times it stay far from 1e30)"""
 FUSED = True
 """take the fused kernel where it applies (False: always the reference scan; benchmarks and tests compare them)"""
+CELLS_FROM = 256
+"""team size from which the fused scan decides by cells (policy/scan_cells.py; below, every pair is computed)"""
 
 
 class _RowUniforms:
@@ -255,14 +257,24 @@ def _scan_fused(c: CompiledRound, fmap: FeatureMap, obs: Observation, keys: list
         for e, v in enumerate(key.tolist()):
             klo[e, rule], khi[e, rule] = v & 0x7FFFFFFF, (v >> 31) & 0x7FFFFFFF
     fa_np, out_np = fa.numpy(), out.numpy()
+    by_cells = n >= CELLS_FROM and bool(np.isfinite(pos).all())
+    if by_cells:
+        from . import scan_cells
+
+        # |o_ij - (p_j - p_i)| per axis is at most sigma times the table's largest radius; plus float32 rounding
+        reach = np.float64(pairs.noise_std * float(radius.max()) * (1 + 1e-6) + 1e-5 * (1 + float(np.abs(pos).max())))
 
     def run(e: int, first: int, stop: int) -> None:
-        sk.program_scan(pos[e], np.int64(noise[e] & 0x7FFFFFFF), np.int64((noise[e] >> 31) & 0x7FFFFFFF),
-                        np.float32(pairs.noise_std), radius, cossin, np.int64(first), fa_np[e],
-                        c.pair["pk"], c.pair["psign"], c.pair["pa"], c.pair["pb"],
-                        c.rules["kind"], klo[e], khi[e], c.rules["sf"], c.rules["sw"], c.rules["sn"],
-                        c.rules["code"], c.rules["arg"], c.rules["clen"], c.rules["tf"], c.rules["tw"], c.rules["tn"],
-                        c.rules["thr"], out_np[e, first:stop])
+        args = (pos[e], np.int64(noise[e] & 0x7FFFFFFF), np.int64((noise[e] >> 31) & 0x7FFFFFFF),
+                np.float32(pairs.noise_std), radius, cossin, np.int64(first), fa_np[e],
+                c.pair["pk"], c.pair["psign"], c.pair["pa"], c.pair["pb"],
+                c.rules["kind"], klo[e], khi[e], c.rules["sf"], c.rules["sw"], c.rules["sn"],
+                c.rules["code"], c.rules["arg"], c.rules["clen"], c.rules["tf"], c.rules["tw"], c.rules["tn"],
+                c.rules["thr"], out_np[e, first:stop])
+        if by_cells:
+            scan_cells.cell_scan(*args, reach)
+        else:
+            sk.program_scan(*args)
 
     workers = torch.get_num_threads()
     if workers <= 1 or b * n * n < PARALLEL_FROM:
