@@ -45,6 +45,21 @@ def test_close_pairs_are_exactly_the_pairs_within_the_radius():
     assert k.shape[-1] == int((d <= 0.7).sum(-1).max())
 
 
+@pytest.mark.parametrize("spread", [12.0, 2000.0])  # a span the key table covers, and one it does not
+def test_the_compiled_cell_list_gives_the_torch_pairs_in_their_order(spread, monkeypatch):
+    """The compiled candidates (the ranges by pair_kernels.cell_ranges, or searchsorted for a wide span) against the
+    torch path: the same pairs in the same order, so the ramps are summed alike."""
+    if not pairs._numba_on(torch.zeros(1)):
+        pytest.skip("numba is not installed (the compiled cell list needs it)")
+    s = _scattered(2, 400, spread, dtype=torch.float32)
+    got = {}
+    for compiled in (True, False):
+        monkeypatch.setattr(pairs, "_numba_on", lambda pos, c=compiled: c)
+        got[compiled] = pairs.close_pairs(s.pos, 0.7)
+    assert got[True][0].numel() > 0
+    assert torch.equal(got[True][0], got[False][0]) and torch.equal(got[True][1], got[False][1])
+
+
 @pytest.mark.parametrize("n, spread", [(40, 3.0), (300, 25.0)])
 def test_cell_list_collision_cost_equals_the_dense_ramp_and_its_gradient(n, spread):
     """In float64, so the only difference, the order of the sum, is far below the tolerance."""

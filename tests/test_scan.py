@@ -84,6 +84,24 @@ def test_the_cell_scan_gives_the_every_pair_picks_on_a_large_swarm(monkeypatch):
         assert torch.equal(got[True], got[False]), text
 
 
+def test_a_random_rules_key_orders_candidates_as_the_float32_uniform_and_the_index_do():
+    """Above 2^23 the reference's float32 (u24 + 0.5) rounds to even, so u24 = 2k + 1 and 2k + 2 give one uniform and
+    the lower index wins: the cell scan's integer key must tie them too (a swarm of 1,000 met this every few
+    steps before the key said so)."""
+    from neurosym_cli.policy import scan_cells
+
+    def uniform(u24):
+        return (np.float32(u24) + np.float32(0.5)) * np.float32(1.0 / (1 << 24))
+
+    for u24 in (5, 6, (1 << 23) - 1, 1 << 23, (1 << 23) + 1, 16742671, 16742672, (1 << 24) - 2, (1 << 24) - 1):
+        for other in (o for o in (u24 - 1, u24 + 1) if o < 1 << 24):
+            for j, k in ((3, 7), (7, 3)):
+                a = scan_cells.uniform_key(np.uint32(u24 << 8 | 0x5A), j)
+                b = scan_cells.uniform_key(np.uint32(other << 8), k)
+                want = (uniform(u24), -j) > (uniform(other), -k)
+                assert (a > b) == want and a > 0, (u24, other, j, k)
+
+
 @pytest.mark.parametrize("cells", [False, True], ids=["every-pair", "by-cells"])
 def test_close_calls_on_the_angle_are_decided_by_the_exact_angle(cells, monkeypatch):
     """Thresholds set to pairs' exact bearings (float32 atan2, as the reference computes them): the fast angle is

@@ -10,7 +10,7 @@ true, false or undecided for the whole cell (three-valued: and = min, or = max):
 * an **argmax rule** visits cells by decreasing upper bound of its score and stops when the next bound is below the
   best score found: only the members of the visited cells are computed (their noise, features, filter, score);
 * a **random rule** takes the largest counter uniform over all candidates (one hash each, as the reference draws
-  them; a 64-bit key makes the uniform, then the lower index, decide in one vectorised max), then asks whether the
+  them; a 64-bit key, ``uniform_key``, makes the uniform, then the lower index, decide in one vectorised max), then asks whether the
   winner passes the filter: its cell's bounds say so, or the pair is computed; a loser is struck out and the max
   taken again (after ``RETRIES`` losers, every cell's bounds are read and only the undecided members computed).
 
@@ -38,6 +38,15 @@ _SLACK = 1e-5
 """relative allowance of the bounds for float32 rounding (a float32 operation rounds by 6e-8 of its magnitude)"""
 _ANGLE_SLACK = 1e-4
 """rad: the angle bounds' allowance (the fast angle of a corner is within THETA_ERR of atan2, 1e-5)"""
+
+
+@njit(inline="always", **_JIT)
+def uniform_key(h, j):
+    """int64 > 0: a random rule's order of candidate j with counter hash h: larger for a larger float32 uniform
+    (u24 + 0.5) 2^-24 (scan_kernels' value: above 2^23 the + 0.5 rounds to even, so neighbouring u24 can tie),
+    then for a lower index (the reference's tie rule); 0 is left for a struck candidate."""
+    u = np.float32(np.float32((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + np.float32(0.5))  # rounded as there
+    return ((np.int64(u * np.float32(2.0)) + 1) << 32) | (0xFFFFFFFF - j)  # 2u is an integer below 2^25
 
 
 @njit(**_JIT)
@@ -252,11 +261,13 @@ def _offsets(pos, lo, hi, sigma, radius, cossin, i, order, s0, s1, mox, moy):
 
 
 @njit(inline="always", **_JIT)
-def _features(ox, oy, fa, i, pk, psign, pa, pb, fj):
-    """fj (P,) float32 <- the features of a pair with noisy offset (ox, oy), as the fused kernel computes them (the
-    fast angle for THETA)."""
+def _features(ox, oy, fa, i, pk, psign, pa, pb, fj, which, value):
+    """fj (P,) float32 <- the features p with which[p] == value of a pair with noisy offset (ox, oy), as the fused
+    kernel computes them (the fast angle for THETA)."""
     n_pair = pk.shape[0]
     for p in range(n_pair):
+        if which[p] != value:
+            continue
         k = pk[p]
         s = np.float32(-1.0) if psign[p] < 0 else np.float32(1.0)
         if k == X:
@@ -420,13 +431,17 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                         if j == i:
                             continue
                         ox, oy = mox[s_ - s0], moy[s_ - s0]
-                        _features(ox, oy, fa, i, pk, psign, pa, pb, fj)
-                        if st == _UNDECIDED and not _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg,
-                                                                 clen, tf, tw, tn, thr, stack):
-                            continue
+                        _features(ox, oy, fa, i, pk, psign, pa, pb, fj, need[k], True)  # the score's first
                         v, m = _form(fj, fa, n_pair, pk, psign, ox, oy, i, sf[k], sw[k], sn[k], False)
                         if m > 0:
                             v, m = _form(fj, fa, n_pair, pk, psign, ox, oy, i, sf[k], sw[k], sn[k], True)
+                        if pick >= 0 and (v < best or (v == best and j > pick)):
+                            continue  # cannot win: its filter need not be known
+                        if st == _UNDECIDED:
+                            _features(ox, oy, fa, i, pk, psign, pa, pb, fj, need[k], False)
+                            if not _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg, clen, tf, tw, tn,
+                                                thr, stack):
+                                continue
                         if pick < 0 or v > best or (v == best and j < pick):
                             best = v
                             pick = j
@@ -434,9 +449,8 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                 base = i * n
                 kl, kh = klo[k], khi[k]
                 m = np.int64(0)
-                for j in range(n):  # scan_kernels: the uniform's 24 bits of the counter hash, plus one (0: struck)
-                    h = _bits(base + j, kl, kh)
-                    key[j] = ((np.int64((h >> np.uint32(8)) & np.uint32(0xFFFFFF)) + 1) << 32) | (0xFFFFFFFF - j)
+                for j in range(n):
+                    key[j] = uniform_key(_bits(base + j, kl, kh), j)
                     m = max(m, key[j])
                 own = key[i]
                 key[i] = 0  # nobody asks itself
@@ -462,7 +476,7 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                         break
                     if state[c] == _UNDECIDED:
                         ox, oy = _offset(pos, lo, hi, sigma, radius, cossin, i, j, n)
-                        _features(ox, oy, fa, i, pk, psign, pa, pb, fj)
+                        _features(ox, oy, fa, i, pk, psign, pa, pb, fj, every, True)
                         if _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg, clen, tf, tw, tn, thr,
                                         stack):
                             pick = j
@@ -490,7 +504,7 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                                 continue
                             if state[c] == _UNDECIDED:
                                 ox, oy = _offset(pos, lo, hi, sigma, radius, cossin, i, j, n)
-                                _features(ox, oy, fa, i, pk, psign, pa, pb, fj)
+                                _features(ox, oy, fa, i, pk, psign, pa, pb, fj, every, True)
                                 if not _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg, clen, tf, tw,
                                                     tn, thr, stack):
                                     continue

@@ -66,6 +66,28 @@ def uniform_rows(n: np.int64, lo: np.int64, hi: np.int64, first: np.int64, out: 
 
 
 @njit(**_JIT)
+def cell_ranges(sorted_key: np.ndarray, query: np.ndarray, start: np.ndarray, count: np.ndarray) -> None:
+    """start, count (Q,) int64 <- for each query key, its range in sorted_key (K,) int64, ascending: the first index
+    of the key and how many there are (torch.searchsorted left, and right minus left), by a table over the keys'
+    span; a key absent from sorted_key gets count 0 and start 0 (nothing of it is read)."""
+    k0 = sorted_key[0]
+    span = sorted_key[-1] - k0 + 1
+    first = np.zeros(span, np.int64)
+    many = np.zeros(span, np.int64)
+    for s in range(sorted_key.shape[0] - 1, -1, -1):
+        first[sorted_key[s] - k0] = s
+        many[sorted_key[s] - k0] += 1
+    for q in range(query.shape[0]):
+        k = query[q] - k0
+        if 0 <= k < span:
+            start[q] = first[k]
+            count[q] = many[k]
+        else:
+            start[q] = 0
+            count[q] = 0
+
+
+@njit(**_JIT)
 def cell_candidates(flat: np.ndarray, order: np.ndarray, start: np.ndarray, count: np.ndarray, reach2: np.float64,
                     first: np.ndarray, second: np.ndarray) -> np.int64:
     """The cell list's candidate pairs (a, s), a < s, in tasks/pairs.py ``close_pairs``' order (agent a = row // 9,

@@ -230,11 +230,11 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
         sorted_key = key[order]
         offs = torch.tensor([dy * w + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)], device=dev)
         query = key[:, None] + offs[None, :]  # (B N, 9) the neighbour cells of each agent
-        start = torch.searchsorted(sorted_key, query, right=False).reshape(-1)
-        count = torch.searchsorted(sorted_key, query, right=True).reshape(-1) - start
         if _numba_on(pos):  # the candidates by the compiled loop, a hair beyond the radius; the exact test below
-            first, second = _candidates_compiled(flat, order, start, count, radius)
+            first, second = _candidates_compiled(flat, order, sorted_key, query, radius)
         else:
+            start = torch.searchsorted(sorted_key, query, right=False).reshape(-1)
+            count = torch.searchsorted(sorted_key, query, right=True).reshape(-1) - start
             row = torch.repeat_interleave(torch.arange(count.numel(), device=dev), count)  # (C,) candidate -> query
             offset = torch.arange(row.numel(), device=dev) - (torch.cumsum(count, 0) - count)[row]
             first, second = row // 9, order[start[row] + offset]
@@ -245,14 +245,30 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
         return first[close], second[close]
 
 
-def _candidates_compiled(flat: Tensor, order: Tensor, start: Tensor, count: Tensor, radius: float
+RANGE_TABLE = True
+"""close_pairs' cell ranges by ``cell_ranges``' table where its span allows (False: always torch.searchsorted; the
+same ranges, benchmarks/bench_swarm_retrain.py compares their speed)"""
+
+
+def _candidates_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query: Tensor, radius: float
                          ) -> tuple[Tensor, Tensor]:
     """close_pairs' candidates (first < second, in its order) closer than radius (1 + 1e-4) in float64 (a superset of
-    the pairs the float32 or float64 test keeps), by tasks/pair_kernels.py ``cell_candidates``."""
+    the pairs the float32 or float64 test keeps), by tasks/pair_kernels.py ``cell_candidates``; each query cell's
+    range of the sorted keys by ``cell_ranges`` (a table over the keys' span: torch.searchsorted's ranges, where a
+    cell holds agents), or by torch.searchsorted where that span is much wider than the team."""
     import numpy as np
 
-    from .pair_kernels import cell_candidates
+    from .pair_kernels import cell_candidates, cell_ranges
 
+    q = query.reshape(-1)
+    span = int(sorted_key[-1] - sorted_key[0]) + 1
+    if RANGE_TABLE and span <= 8 * sorted_key.numel() + 1024:
+        start = torch.empty_like(q)
+        count = torch.empty_like(q)
+        cell_ranges(sorted_key.contiguous().numpy(), q.contiguous().numpy(), start.numpy(), count.numpy())
+    else:
+        start = torch.searchsorted(sorted_key, q, right=False)
+        count = torch.searchsorted(sorted_key, q, right=True) - start
     total = int(count.sum())
     first = torch.empty(total, dtype=torch.long)
     second = torch.empty(total, dtype=torch.long)
