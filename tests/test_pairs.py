@@ -104,6 +104,25 @@ def test_counter_noise_is_deterministic_normal_and_the_same_however_it_is_read()
     assert not torch.allclose(other.rows(0, 5), o.rows(0, 5))
 
 
+def test_the_compiled_noise_of_given_pairs_is_the_torch_noise_bit_for_bit(monkeypatch):
+    """Offsets.at's noise by pair_kernels.noise_at against counter_normal's torch ops; the positions keep their
+    gradient either way."""
+    if not pairs._numba_on(torch.zeros(1)):
+        pytest.skip("numba is not installed (the compiled noise needs it)")
+    g = torch.Generator().manual_seed(2)
+    pos = (torch.rand(3, 700, 2, generator=g) * 40).requires_grad_()
+    o = pairs.Offsets(pos, 0.05, torch.randint(0, 2 ** 62, (3,), generator=g))
+    recv = torch.randint(0, 700, (3, 700, 2), generator=g)
+    send = torch.randint(0, 700, (3, 700, 2), generator=g)
+    got = {}
+    for compiled in (True, False):
+        monkeypatch.setattr(pairs, "_numba_on", lambda p, c=compiled: c)
+        got[compiled] = o.at(recv, send)
+    assert got[True].shape == (3, 700, 2, 2) and torch.equal(got[True], got[False])
+    grad, = torch.autograd.grad(got[True].sum(), pos)
+    assert grad.abs().sum() > 0
+
+
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nargmax(map(1.0*d, filter(d <= 3.0, l)))\n" \
           "argmax(map(-1.0*gd + 1.0*dx, filter(dy >= 0.0, l)))"
 

@@ -55,6 +55,20 @@ def noisy_rows(pos: np.ndarray, lo: np.int64, hi: np.int64, first: np.int64, sig
 
 
 @njit(**_JIT)
+def noise_at(counter: np.ndarray, lo: np.ndarray, hi: np.ndarray, sigma: np.float32, radius: np.ndarray,
+             cos: np.ndarray, sin: np.ndarray, out: np.ndarray) -> None:
+    """out (B, M, 2) float32 <- sigma times tasks/pairs.py ``counter_normal`` of counters (B, M) int64 (i N + j of
+    given pairs) under each episode's key halves lo, hi (B,): the noise of ``Offsets.at``."""
+    for e in range(counter.shape[0]):
+        for m in range(counter.shape[1]):
+            h = _bits(counter[e, m], lo[e], hi[e])
+            rad = radius[h >> np.uint32(16)]
+            k = h & np.uint32(0xFFFF)
+            out[e, m, 0] = sigma * (rad * cos[k])
+            out[e, m, 1] = sigma * (rad * sin[k])
+
+
+@njit(**_JIT)
 def uniform_rows(n: np.int64, lo: np.int64, hi: np.int64, first: np.int64, out: np.ndarray) -> None:
     """out (R, N) float32 <- tasks/pairs.py ``counter_uniform`` of counters i N + j, receivers first..first+R-1."""
     for r in range(out.shape[0]):

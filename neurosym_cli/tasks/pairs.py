@@ -140,8 +140,27 @@ class Offsets:
         bi = torch.arange(b, device=recv.device).view((b,) + (1,) * (recv.dim() - 1))
         o = self.pos[bi, send] - self.pos[bi, recv]
         if self.noise_std > 0:
-            o = o + self.noise_std * counter_normal(self.key, (recv * n + send).to(torch.int32))
+            o = o + self._noise_at((recv * n + send).to(torch.int32))
         return o
+
+    def _noise_at(self, counter: Tensor) -> Tensor:
+        """(B, ...) int32 counters -> (B, ..., 2) sigma eps: by the compiled loop on a CPU (pair_kernels.noise_at,
+        the same numbers as the torch ops, which serve elsewhere)."""
+        if not _numba_on(self.pos):
+            return self.noise_std * counter_normal(self.key, counter)
+        import numpy as np
+
+        from .pair_kernels import noise_at
+
+        b = counter.shape[0]
+        flat = counter.reshape(b, -1).to(torch.int64).contiguous()
+        out = torch.empty(flat.shape + (2,))
+        keys = self.key.tolist()
+        lo = np.array([k & 0x7FFFFFFF for k in keys], np.int64)
+        hi = np.array([(k >> 31) & 0x7FFFFFFF for k in keys], np.int64)
+        noise_at(flat.numpy(), lo, hi, np.float32(self.noise_std), *[t.numpy() for t in _box_muller_tables("cpu")],
+                 out.numpy())
+        return out.view(tuple(counter.shape) + (2,))
 
     def rows(self, first: int, stop: int) -> Tensor:
         """(B, stop - first, N, 2): receivers first..stop-1, every j; [r, j] = x_j - x_(first + r) + noise. Without
