@@ -1,7 +1,8 @@
 """Retraining a swarm under a program (issue 39's 2x at N = 1,000): the sparse path as it was (every pair of the
-program's filter scan computed by policy/scan_kernels.py, the cell list's ranges by torch.searchsorted) against
-now (the scan decided by cells, policy/scan_cells.py, and the ranges' table, tasks/pair_kernels.py cell_ranges),
-their optimizer steps alternated in one process so that both see the same load.
+program's filter scan computed by policy/scan_kernels.py, the cell list's ranges by torch.searchsorted, the noise
+of the picked pairs by torch ops) against now (the scan decided by cells, policy/scan_cells.py; the ranges' table
+and the noise by compiled loops, tasks/pair_kernels.py cell_ranges and noise_at), their optimizer steps
+alternated in one process so that both see the same load.
 
     python benchmarks/bench_swarm_retrain.py                         # N = 1,000, B = 2, T = 200, 6 steps each
     python benchmarks/bench_swarm_retrain.py --agents 300 --horizon 50 --steps 4       # a quick look
@@ -36,7 +37,7 @@ from neurosym_cli.tasks.swarm import SwarmConfig, SwarmTask
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.6, l))"
 """the program of docs/performance.md section 15 (the nearest agent ahead, a random one at least 3.6 away)"""
 PATHS = {"before": (10 ** 9, False), "now": (0, True)}
-"""path -> (scan.CELLS_FROM, pairs.RANGE_TABLE)"""
+"""path -> (scan.CELLS_FROM, pairs.COMPILED_LOOPS)"""
 
 
 def _steps(env, path: str, *, batch: int, horizon: int, program: str):
@@ -50,7 +51,7 @@ def _steps(env, path: str, *, batch: int, horizon: int, program: str):
     mine = torch.random.get_rng_state()
     while True:
         torch.random.set_rng_state(mine)  # dropout's stream, as if this path ran alone
-        scan.CELLS_FROM, pairs.RANGE_TABLE = PATHS[path]
+        scan.CELLS_FROM, pairs.COMPILED_LOOPS = PATHS[path]
         t0, c0 = time.perf_counter(), time.process_time()
         state = env.reset(batch, gen)[0]
         traj = rollout(env, policy, comm, state, rng, horizon, stats=False)

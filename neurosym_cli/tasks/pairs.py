@@ -146,7 +146,7 @@ class Offsets:
     def _noise_at(self, counter: Tensor) -> Tensor:
         """(B, ...) int32 counters -> (B, ..., 2) sigma eps: by the compiled loop on a CPU (pair_kernels.noise_at,
         the same numbers as the torch ops, which serve elsewhere)."""
-        if not _numba_on(self.pos):
+        if not (COMPILED_LOOPS and _numba_on(self.pos)):
             return self.noise_std * counter_normal(self.key, counter)
         import numpy as np
 
@@ -264,9 +264,10 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
         return first[close], second[close]
 
 
-RANGE_TABLE = True
-"""close_pairs' cell ranges by ``cell_ranges``' table where its span allows (False: always torch.searchsorted; the
-same ranges, benchmarks/bench_swarm_retrain.py compares their speed)"""
+COMPILED_LOOPS = True
+"""close_pairs' cell ranges by ``cell_ranges``' table where its span allows, and Offsets.at's noise by ``noise_at``
+(False: torch.searchsorted and counter_normal's ops, the same numbers; benchmarks/bench_swarm_retrain.py compares
+their speed)"""
 
 
 def _candidates_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query: Tensor, radius: float
@@ -281,7 +282,7 @@ def _candidates_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query:
 
     q = query.reshape(-1)
     span = int(sorted_key[-1] - sorted_key[0]) + 1
-    if RANGE_TABLE and span <= 8 * sorted_key.numel() + 1024:
+    if COMPILED_LOOPS and span <= 8 * sorted_key.numel() + 1024:
         start = torch.empty_like(q)
         count = torch.empty_like(q)
         cell_ranges(sorted_key.contiguous().numpy(), q.contiguous().numpy(), start.numpy(), count.numpy())
