@@ -69,26 +69,35 @@ def main() -> None:
     ap.add_argument("--batch", type=int, default=2)
     ap.add_argument("--horizon", type=int, default=200)
     ap.add_argument("--steps", type=int, default=6, help="optimizer steps per path")
+    ap.add_argument("--paths", default="before,now", help="the paths to run (one alone: to run 'before' on an older "
+                    "checkout, PYTHONPATH=<its root>, where the switches do not exist and its own code runs)")
     ap.add_argument("--json", default="", help="also write the result here")
     args = ap.parse_args()
     torch.set_num_threads(1)
     env = SwarmTask(SwarmConfig(name="swarm", agents_per_group=args.agents // 2))
-    its = {p: _steps(env, p, batch=args.batch, horizon=args.horizon, program=PROGRAM) for p in PATHS}
-    done: dict[str, list] = {p: [] for p in PATHS}
+    paths = args.paths.split(",")
+    its = {p: _steps(env, p, batch=args.batch, horizon=args.horizon, program=PROGRAM) for p in paths}
+    done: dict[str, list] = {p: [] for p in paths}
     for s in range(args.steps):
-        for p in PATHS:
+        for p in paths:
             done[p].append(next(its[p]))
         print(f"step {s + 1}/{args.steps}: " + ", ".join(
-            f"{p} loss {done[p][-1][0]:.6g}, {done[p][-1][2]:.1f} CPU s" for p in PATHS), flush=True)
+            f"{p} loss {done[p][-1][0]:.6g}, {done[p][-1][2]:.1f} CPU s" for p in paths), flush=True)
     scale = 200 / (args.horizon * args.batch)  # per 200-step rollout of one episode
     row = {"agents": args.agents, "batch": args.batch, "horizon": args.horizon, "steps": args.steps,
-           "program": PROGRAM, "losses_equal":
-           [r[0] for r in done["before"]] == [r[0] for r in done["now"]]}
-    for p in PATHS:
+           "program": PROGRAM, "code": neurosym_cli.__file__}
+    for p in paths:
         rest = done[p][1:] or done[p]
         row[p] = {"cpu_s_per_rollout": statistics.median(r[2] for r in rest) * scale,
                   "wall_s_per_rollout": statistics.median(r[1] for r in rest) * scale,
                   "losses": [r[0] for r in done[p]]}
+    if len(paths) == 1:
+        print(f"{paths[0]}: {row[paths[0]]['cpu_s_per_rollout']:.2f} CPU s a rollout, losses {row[paths[0]]['losses']}")
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump(row, f, indent=1)
+        return
+    row["losses_equal"] = row["before"]["losses"] == row["now"]["losses"]
     row["ratio_cpu"] = row["before"]["cpu_s_per_rollout"] / row["now"]["cpu_s_per_rollout"]
     row["ratio_wall"] = row["before"]["wall_s_per_rollout"] / row["now"]["wall_s_per_rollout"]
     print(f"N = {args.agents:,}, B = {args.batch}, T = {args.horizon}: before "

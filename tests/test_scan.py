@@ -213,3 +213,19 @@ def test_what_the_kernel_cannot_decide_as_the_reference_does_is_left_to_it():
                               env.features("v2")) is None  # nine terms
     assert scan.compile_round(parse("argmax(map(1e20*d, filter(true, l)))"), 0, fmap) is None
     assert scan.compile_round(parse("argmax(map(1e9*d, filter(true, l)))"), 0, fmap) is not None
+
+
+def test_the_retraining_benchmark_runs_both_paths_to_the_same_losses(tmp_path):
+    """benchmarks/bench_swarm_retrain.py on a small case: the old path (every pair, searchsorted, torch noise) and the
+    new one train the same weights to the same losses, bit for bit."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "r.json"
+    subprocess.run([sys.executable, str(root / "benchmarks/bench_swarm_retrain.py"), "--agents", "300", "--horizon", "3",
+                    "--steps", "2", "--json", str(out)], check=True, capture_output=True, cwd=tmp_path)
+    row = json.loads(out.read_text())
+    assert row["losses_equal"] and len(row["now"]["losses"]) == 2 and row["ratio_cpu"] > 0
