@@ -34,7 +34,8 @@ from ..tasks.pairs import Offsets, _box_muller_tables, _numba_on, rows_per_chunk
 MAX_TERMS = 8
 """terms of a linear form the fused kernel takes (its close-call margin covers their roundings)"""
 MAX_WEIGHT = 1e15
-"""the largest score weight the fused kernel takes (bounded features times it stay far from 1e30)"""
+"""the largest weight of a score or a test the fused kernels take (bounded features times it stay far from the
+reference's -1e30 sentinel and from float32's overflow)"""
 FUSED = True
 """take the fused kernel where it applies (False: always the reference scan; benchmarks and tests compare them)"""
 CELLS_FROM = 256
@@ -141,6 +142,8 @@ def _compile(program: Program, round: int, vocab) -> CompiledRound | None:
     def linear(f: Linear) -> list[tuple[int, float]] | None:
         if len(f.terms) > MAX_TERMS:
             return None  # scan_kernels._margin bounds the roundings of up to MAX_TERMS terms
+        if any(abs(w) > MAX_WEIGHT for _, w in f.terms):
+            return None  # terms near float32's overflow: the reference's arithmetic decides those
         out = []
         for name, w in f.terms:
             k = ident(name)
@@ -175,8 +178,6 @@ def _compile(program: Program, round: int, vocab) -> CompiledRound | None:
     for r in rules:
         if not isinstance(r, (ArgMaxRule, RandomRule)):
             return None  # the reference names what it is not
-        if isinstance(r, ArgMaxRule) and any(abs(w) > MAX_WEIGHT for _, w in r.score.terms):
-            return None  # scores near the reference's -1e30 sentinel: its arithmetic decides those
         code: list = []
         ts: list = []
         thr: list = []

@@ -38,6 +38,8 @@ _SLACK = 1e-5
 """relative allowance of the bounds for float32 rounding (a float32 operation rounds by 6e-8 of its magnitude)"""
 _ANGLE_SLACK = 1e-4
 """rad: the angle bounds' allowance (the fast angle of a corner is within THETA_ERR of atan2, 1e-5)"""
+_F32_MAX = 3.4028234663852886e38 / (1 + 2 * _SLACK)
+"""a linear form whose terms may reach float32's largest value is not bounded (its float32 sum may be inf or NaN)"""
 
 
 @njit(inline="always", **_JIT)
@@ -174,6 +176,8 @@ def _linear_bounds(c, flo, fhi, fa, n_pair, i, ids, w, nterm):
             lo += v
             hi += v
             mag += abs(v)
+    if mag >= _F32_MAX:  # a float32 term may overflow (inf - inf is NaN there): nothing is bounded
+        return -np.inf, np.inf
     return lo - _SLACK * mag - 1e-30, hi + _SLACK * mag + 1e-30
 
 
@@ -197,7 +201,7 @@ def _score_bounds(c0, c1, flo, fhi, fa, n_pair, i, ids, w, nterm, ub, mag):
                 ub[c] += v
                 mag[c] += abs(v)
     for c in range(c0, c1):
-        ub[c] += _SLACK * mag[c] + 1e-30
+        ub[c] = np.inf if mag[c] >= _F32_MAX else ub[c] + _SLACK * mag[c] + 1e-30
 
 
 @njit(inline="always", **_JIT)

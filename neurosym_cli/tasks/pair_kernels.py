@@ -19,6 +19,10 @@ except ImportError:  # pragma: no cover - exercised only on machines without num
         return lambda f: f
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+# numba's cache is keyed by the stamp of the function's own file: a kernel that inlines a helper from another file
+# (policy/scan_kernels.py and scan_cells.py inline _bits; scan_cells inlines scan_kernels' angle and norm) keeps its
+# cached code when only the helper's file changes. After editing a helper, delete the callers' __pycache__/*.nb*
+# (a fresh clone, as CI runs, has none).
 
 
 _M1, _M2 = np.uint32(0x7FEB352D), np.uint32(0x5BD1E995)
