@@ -129,6 +129,23 @@ def nine_seed_gap() -> tuple[str, ...]:
     return f"{m:.1f}", f"{h:.1f}", str(len(gaps) - 1)
 
 
+def swarm_retrain() -> tuple[str, ...]:
+    """benchmarks/bench_swarm_retrain.py's committed run (docs/results/bench-swarm-retrain.json): CPU seconds a
+    rollout before and now, alternated in one process, and their ratio."""
+    r = json.loads((ROOT / "docs" / "results" / "bench-swarm-retrain.json").read_text())["alternated_in_one_process"]
+    return (f"{r['before']['cpu_s_per_rollout']:.2f}", f"{r['now']['cpu_s_per_rollout']:.2f}",
+            f"{r['ratio_cpu']:.2f}")
+
+
+def cross_seed2_det() -> tuple[str, ...]:
+    """random-cross under the defaults, training seed 2 (docs/results/seeds-defaults/random-cross-seed2.json):
+    det-prog-retrained's test loss and max out-degree, and prog-retrained's max out-degree."""
+    b = json.loads((ROOT / "docs" / "results" / "seeds-defaults" / "random-cross-seed2.json").read_text())["baselines"]
+    return (f"{b['det-prog-retrained']['summary']['cost']['mean']:.2f}",
+            f"{b['det-prog-retrained']['summary']['max_out']['mean']:.2f}",
+            f"{b['prog-retrained']['summary']['max_out']['mean']:.2f}")
+
+
 @dataclass(frozen=True)
 class Check:
     doc: str  # path from the repository root
@@ -150,6 +167,10 @@ CHECKS = [
     Check("README.md", r"`select\.finalists` \((\d+)\)", select_finalists, times=2),
     Check("docs/fidelity.md", r"`select\.finalists` \((\d+)\)", select_finalists),
     Check("docs/extending.md", r"`optim\.grad_clip`, a norm of ([\d.]+)", grad_clip),
+    Check("docs/performance.md", r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*",
+          swarm_retrain),
+    Check("docs/fidelity.md", r"so it now runs b14: test loss ([\d.]+), max out ([\d.]+) against ([\d.]+)",
+          cross_seed2_det),
     Check("docs/extending.md", r"at most (\d+) rules in a round, filters nested at most (\d+) deep, ([\d,]+) "
           r"characters a line", parser_limits),
 ]
