@@ -167,8 +167,8 @@ CHECKS = [
     Check("README.md", r"`select\.finalists` \((\d+)\)", select_finalists, times=2),
     Check("docs/fidelity.md", r"`select\.finalists` \((\d+)\)", select_finalists),
     Check("docs/extending.md", r"`optim\.grad_clip`, a norm of ([\d.]+)", grad_clip),
-    Check("docs/performance.md", r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*",
-          swarm_retrain),
+    Check("docs/performance.md",
+          r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*", swarm_retrain),
     Check("docs/fidelity.md", r"so it now runs b14: test loss ([\d.]+), max out ([\d.]+) against ([\d.]+)",
           cross_seed2_det),
     Check("docs/extending.md", r"at most (\d+) rules in a round, filters nested at most (\d+) deep, ([\d,]+) "

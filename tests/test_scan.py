@@ -225,8 +225,9 @@ def test_the_retraining_benchmark_runs_both_paths_to_the_same_losses(tmp_path):
 
     root = Path(__file__).resolve().parents[1]
     out = tmp_path / "r.json"
-    subprocess.run([sys.executable, str(root / "benchmarks/bench_swarm_retrain.py"), "--agents", "300", "--horizon", "3",
-                    "--steps", "2", "--json", str(out)], check=True, capture_output=True, cwd=tmp_path)
+    cmd = [sys.executable, str(root / "benchmarks/bench_swarm_retrain.py"), "--agents", "300", "--horizon", "3",
+           "--steps", "2", "--json", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True, cwd=tmp_path)
     row = json.loads(out.read_text())
     assert row["losses_equal"] and len(row["now"]["losses"]) == 2 and row["ratio_cpu"] > 0
 

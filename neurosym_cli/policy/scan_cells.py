@@ -10,9 +10,10 @@ true, false or undecided for the whole cell (three-valued: and = min, or = max):
 * an **argmax rule** visits cells by decreasing upper bound of its score and stops when the next bound is below the
   best score found: only the members of the visited cells are computed (their noise, features, filter, score);
 * a **random rule** takes the largest counter uniform over all candidates (one hash each, as the reference draws
-  them; a 64-bit key, ``uniform_key``, makes the uniform, then the lower index, decide in one vectorised max), then asks whether the
-  winner passes the filter: its cell's bounds say so, or the pair is computed; a loser is struck out and the max
-  taken again (after ``RETRIES`` losers, every cell's bounds are read and only the undecided members computed).
+  them; a 64-bit key, ``uniform_key``, makes the uniform, then the lower index, decide in one vectorised max),
+  then asks whether the winner passes the filter: its cell's bounds say so, or the pair is computed; a loser is
+  struck out and the max taken again (after ``RETRIES`` losers, every cell's bounds are read and only the
+  undecided members computed).
 
 A computed pair is the fused kernel's (policy/scan_kernels.py): the same float32 operations, the fast angle with
 its close calls decided by atan2f, so the picks are bit for bit the reference scan's (tests/test_scan.py). Shapes:
@@ -26,7 +27,7 @@ import math
 import numpy as np
 
 from ..tasks.pair_kernels import _JIT, _bits, njit
-from .scan_kernels import AND, D, OR, PRODUCT, TEST, THETA, THETA_ERR, THETA_EXACT, TRUE, X, Y, _atan2_fast, _margin, \
+from .scan_kernels import AND, D, PRODUCT, TEST, THETA, THETA_ERR, THETA_EXACT, TRUE, X, Y, _atan2_fast, _margin, \
     _norm
 
 PER_CELL = 12
