@@ -229,24 +229,11 @@ def _cell_filter(c, k, flo, fhi, fa, n_pair, i, code, arg, clen, tf, tw, tn, thr
     return stack[0]
 
 
-@njit(inline="always", **_JIT)
-def _offset(pos, lo, hi, sigma, radius, cossin, i, j, n):
-    """(ox, oy) float32: the noisy offset o_ij as scan_kernels computes it (tasks/pair_kernels.py noisy_rows)."""
-    ox = pos[j, 0] - pos[i, 0]
-    oy = pos[j, 1] - pos[i, 1]
-    if sigma > 0:
-        h = _bits(i * n + j, lo, hi)
-        rad = radius[h >> np.uint32(16)]
-        q = h & np.uint32(0xFFFF)
-        ox = ox + sigma * (rad * cossin[q, 0])
-        oy = oy + sigma * (rad * cossin[q, 1])
-    return ox, oy
-
-
 @njit(**_JIT)
 def _offsets(pos, lo, hi, sigma, radius, cossin, i, order, s0, s1, mox, moy):
-    """mox, moy (s1 - s0,) float32 <- ``_offset`` of receiver i and agents order[s0:s1], in one loop the compiler
-    vectorises (about 6x the speed of the same calls one by one)."""
+    """mox, moy (s1 - s0,) float32 <- the noisy offsets o_ij of receiver i and agents j = order[s0:s1] as
+    scan_kernels computes them (tasks/pair_kernels.py noisy_rows), in one loop the compiler vectorises (about 6x
+    the speed of a scalar call per pair)."""
     n = pos.shape[0]
     xi, yi = pos[i, 0], pos[i, 1]
     base = i * n
@@ -369,6 +356,9 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
     cstart = np.zeros(n + 1, np.int64)
     box = np.empty((4, n), np.float64)
     cells = _cells(pos, PER_CELL, cell_of, order, cstart, box)
+    slot = np.empty(n, np.int64)  # each agent's place in order
+    for s_ in range(n):
+        slot[order[s_]] = s_
     pw = max(n_pair, 1)
     flo = np.empty((pw, cells), np.float64)
     fhi = np.empty((pw, cells), np.float64)
@@ -480,7 +470,8 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                         pick = j
                         break
                     if state[c] == _UNDECIDED:
-                        ox, oy = _offset(pos, lo, hi, sigma, radius, cossin, i, j, n)
+                        _offsets(pos, lo, hi, sigma, radius, cossin, i, order, slot[j], slot[j] + 1, mox, moy)
+                        ox, oy = mox[0], moy[0]
                         _features(ox, oy, fa, i, pk, psign, pa, pb, fj, every, True)
                         if _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg, clen, tf, tw, tn, thr,
                                         stack):
@@ -508,7 +499,9 @@ def cell_scan(pos, lo, hi, sigma, radius, cossin, first, fa,
                             if key[j] <= m:
                                 continue
                             if state[c] == _UNDECIDED:
-                                ox, oy = _offset(pos, lo, hi, sigma, radius, cossin, i, j, n)
+                                _offsets(pos, lo, hi, sigma, radius, cossin, i, order, slot[j], slot[j] + 1, mox,
+                                         moy)
+                                ox, oy = mox[0], moy[0]
                                 _features(ox, oy, fa, i, pk, psign, pa, pb, fj, every, True)
                                 if not _pair_filter(fj, fa, n_pair, pk, psign, ox, oy, i, k, code, arg, clen, tf, tw,
                                                     tn, thr, stack):
