@@ -8,6 +8,7 @@ kernels (compile=fused), ratios measured in one process, and the losses of each 
     python benchmarks/bench_compile.py --round                  # one dense round, eager against fused, N = 10-200
     python benchmarks/bench_compile.py --swarm 100 --batch 4 --horizon 50 --modes eager,fused   # swarm, N = 200
     python benchmarks/bench_compile.py --device cuda            # B = 50 ... 4096: eager, compiled, captured
+    python benchmarks/bench_compile.py --profile --modes eager,fused --steps 4   # where a training step's time goes
 
 One optimizer step = the task's reset of `batch` episodes (buckets of equal N), a rollout of each bucket with
 gradients, backward, Adam, as in training.fit. Both modes start from the same weights and generators, so their
@@ -144,6 +145,48 @@ def round_rows(serves_from: int, shapes=((12, 10), (12, 20), (12, 40), (4, 100),
     return rows
 
 
+PARTS = {
+    "observe (the task's observation and noise)": [("formation.py", "observe"), ("tasks/base.py", "observe")],
+    "transformer forward (rounds, read-out)": [("policy/transformer.py", "forward")],
+    "task dynamics and cost": [("formation.py", "step"), ("formation.py", "cost")],
+    "backward: autograd's own ops": [("~", "<method 'run_backward' of 'torch._C._EngineBase' objects>")],
+    "optimizer (Adam)": [("optim/adam.py", "step")],
+}
+"""part of a training step -> the (file suffix, function) whose cumulative cProfile time it is; the fused
+kernels' backward, called from autograd's engine, is counted apart ("backward: fused pair kernels")"""
+
+
+def profile_rows(env, mode: str, *, batch: int, horizon: int, steps: int) -> dict:
+    """Where a training step's CPU time goes under compile=mode: cProfile over ``steps`` optimizer steps (after one
+    not counted), as seconds per step for each of ``PARTS``, the fused kernels' backward apart, and the rest (the
+    rollout loop, the loss, Python). cProfile's own overhead inflates the Python-heavy parts a little."""
+    import cProfile
+    import pstats
+
+    it = _steps(env, mode, batch=batch, horizon=horizon, device=torch.device("cpu"))
+    next(it)
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(steps):
+        next(it)
+    prof.disable()
+    st = pstats.Stats(prof).stats  # (file, line, name) -> (calls, primitive calls, tottime, cumtime, callers)
+    total = sum(v[2] for v in st.values())
+
+    def cum(file: str, name: str, own: bool = False) -> float:
+        return sum(v[2] if own else v[3] for (f, _, n), v in st.items() if f.endswith(file) and n == name)
+
+    rows = {part: sum(cum(f, n) for f, n in keys) for part, keys in PARTS.items()}
+    back = sum(v[3] for (f, _, n), v in st.items() if f.endswith("edge_kernels.py") and n.endswith("_bwd"))
+    rows["backward: autograd's own ops"] -= back
+    rows["backward: fused pair kernels"] = back
+    rows["the rest (rollout loop, loss, Python)"] = total - sum(rows.values())
+    out = {"mode": mode, "batch": batch, "horizon": horizon, "steps": steps, "total_s_per_step": total / steps,
+           "parts_s_per_step": {k: round(v / steps, 3) for k, v in rows.items()}}
+    print(json.dumps(out), flush=True)
+    return out
+
+
 def agreement(a: list[float], b: list[float]) -> float:
     """The largest relative difference between two loss curves."""
     return max(abs(x - y) / max(abs(x), 1e-12) for x, y in zip(a, b))
@@ -164,6 +207,8 @@ def main() -> None:
                     "dense below task.sparse_from = 256 agents) instead of random-cross")
     ap.add_argument("--round", action="store_true", help="one dense round at N = 10 to 200, eager against fused "
                     "(the fused kernels serving at every N), and stop")
+    ap.add_argument("--profile", action="store_true", help="where a training step's CPU time goes, per mode "
+                    "(cProfile over --steps steps at the first of --threads), and stop")
     ap.add_argument("--fused-from", type=int, default=None, help="the team size from which compile=fused's kernels "
                     "serve a round (default: edge_kernels.FUSED_FROM)")
     args = ap.parse_args()
@@ -181,6 +226,10 @@ def main() -> None:
     else:
         env = make_task(CrossConfig(name="random-cross"), horizon=args.horizon)
     rows = []
+    if args.profile:
+        torch.set_num_threads(int(args.threads.split(",")[0]))
+        rows = [profile_rows(env, m, batch=args.batch, horizon=args.horizon, steps=args.steps) for m in modes]
+        args.device = "none"
     if args.round:
         from neurosym_cli.policy import edge_kernels
 

@@ -361,3 +361,25 @@ def test_fused_on_teams_below_the_kernels_size_resumes_as_eager(monkeypatch):
     with pytest.raises(ConfigError, match="compile=off, this run has compile=fused"):
         refuse_other_modes(off, "model.pt", steps=7, cfg=large)
     compiling.configure("off")
+
+
+def test_the_profile_benchmark_splits_a_step_by_part(tmp_path):
+    """benchmarks/bench_compile.py --profile on a small case: every part's seconds are >= 0 and add up to the step,
+    and the fused kernels' backward is counted under fused only."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "p.json"
+    cmd = [sys.executable, str(root / "benchmarks/bench_compile.py"), "--profile", "--modes", "eager,fused",
+           "--batch", "8", "--horizon", "3", "--steps", "1", "--threads", "1", "--fused-from", "0", "--json", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True, cwd=tmp_path)
+    eager, fused = json.loads(out.read_text())
+    for row in (eager, fused):
+        parts = row["parts_s_per_step"]
+        assert all(v >= 0 for v in parts.values()) and parts["transformer forward (rounds, read-out)"] > 0
+        assert sum(parts.values()) == pytest.approx(row["total_s_per_step"], abs=0.01)
+    assert eager["parts_s_per_step"]["backward: fused pair kernels"] == 0
+    assert fused["parts_s_per_step"]["backward: fused pair kernels"] > 0

@@ -137,6 +137,19 @@ def swarm_retrain() -> tuple[str, ...]:
             f"{r['ratio_cpu']:.2f}")
 
 
+def compile_profile() -> tuple[str, ...]:
+    """benchmarks/bench_compile.py --profile's committed run (docs/results/bench-compile-profile.json): CPU
+    seconds of a training step, eager then fused."""
+    r = json.loads((ROOT / "docs" / "results" / "bench-compile-profile.json").read_text())["profile"]
+    return tuple(f"{m['total_s_per_step']:.2f}" for m in r)
+
+
+def compile_growth() -> tuple[str, ...]:
+    """The same file's fused / eager training rollouts/s at B = 10, 50, 200."""
+    r = json.loads((ROOT / "docs" / "results" / "bench-compile-profile.json").read_text())["growth_with_batch"]
+    return tuple(f"{g['ratio']:.2f}" for g in r)
+
+
 def cross_seed2_det() -> tuple[str, ...]:
     """random-cross under the defaults, training seed 2 (docs/results/seeds-defaults/random-cross-seed2.json):
     det-prog-retrained's test loss and max out-degree, and prog-retrained's max out-degree."""
@@ -169,6 +182,8 @@ CHECKS = [
     Check("docs/extending.md", r"`optim\.grad_clip`, a norm of ([\d.]+)", grad_clip),
     Check("docs/performance.md",
           r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*", swarm_retrain),
+    Check("docs/performance.md", r"\| \*\*total\*\* \| \*\*([\d.]+)\*\* \| \*\*([\d.]+)\*\* \|", compile_profile),
+    Check("docs/performance.md", r"\| fused / eager \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \|", compile_growth),
     Check("docs/fidelity.md", r"so it now runs b14: test loss ([\d.]+), max out ([\d.]+) against ([\d.]+)",
           cross_seed2_det),
     Check("docs/extending.md", r"at most (\d+) rules in a round, filters nested at most (\d+) deep, ([\d,]+) "
