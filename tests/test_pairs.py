@@ -52,11 +52,39 @@ def test_the_compiled_cell_list_gives_the_torch_pairs_in_their_order(spread, mon
     if not pairs._numba_on(torch.zeros(1)):
         pytest.skip("numba is not installed (the compiled cell list needs it)")
     s = _scattered(2, 400, spread, dtype=torch.float32)
+    grid = torch.stack(torch.meshgrid(torch.arange(12.0), torch.arange(12.0), indexing="ij"), -1).reshape(1, -1, 2)
+    for pos, radius in ((s.pos, 0.7), (grid, 1.0)):  # on the grid, pairs exactly at the radius
+        for inclusive in (False, True):
+            got = {}
+            for compiled, loops in ((True, True), (True, False), (False, True)):  # exact kernel, candidates, torch
+                monkeypatch.setattr(pairs, "_numba_on", lambda pos, c=compiled: c)
+                monkeypatch.setattr(pairs, "COMPILED_LOOPS", loops)
+                got[compiled, loops] = pairs.close_pairs(pos, radius, inclusive)
+            ref = got[False, True]
+            for f, sec in got.values():
+                assert torch.equal(f, ref[0]) and torch.equal(sec, ref[1])
+            if pos is grid:  # 2 x 12 x 11 neighbours exactly 1 apart: kept only by <=
+                assert ref[0].numel() == (264 if inclusive else 0)
+            else:
+                assert ref[0].numel() > 0
+
+
+def test_the_compiled_ramps_are_the_torch_ramps_and_gradients_bit_for_bit(monkeypatch):
+    """near_ramps by its kernels (sums in index_add's order, the backward in autograd's arithmetic) against its torch
+    ops, in float32, on a crowded swarm: the sums and the positions' gradient equal bit for bit."""
+    if not pairs._numba_on(torch.zeros(1)):
+        pytest.skip("numba is not installed (the compiled ramps need it)")
+    s = _scattered(3, 500, 9.0, dtype=torch.float32)
+    env = _cross(0)
+    w = torch.randn(3, generator=torch.Generator().manual_seed(1))
     got = {}
-    for compiled in (True, False):
-        monkeypatch.setattr(pairs, "_numba_on", lambda pos, c=compiled: c)
-        got[compiled] = pairs.close_pairs(s.pos, 0.7)
-    assert got[True][0].numel() > 0
+    for loops in (True, False):
+        monkeypatch.setattr(pairs, "COMPILED_LOOPS", loops)
+        pos = s.pos.detach().clone().requires_grad_()
+        cost = env.collision_cost(dataclasses.replace(s, pos=pos))
+        grad, = torch.autograd.grad((cost * w).sum(), pos)
+        got[loops] = cost.detach(), grad
+    assert got[True][0].min() > 0 and (got[True][1] != 0).float().mean() > 0.5
     assert torch.equal(got[True][0], got[False][0]) and torch.equal(got[True][1], got[False][1])
 
 

@@ -154,17 +154,15 @@ class FormationTask:
     def _collision_cost_near(self, state: FormationState) -> Tensor:
         """The collision ramps over the pairs a cell list finds within ``ramp_reach`` (exact: a pair beyond it
         adds relu(<= 0) = 0 and no gradient in the dense sum)."""
-        from .pairs import close_pairs
+        from .pairs import close_pairs, near_ramps
 
         b, n = state.batch, state.n_agents
-        out = torch.zeros(b, dtype=state.pos.dtype, device=state.pos.device)
         if self.ramp_reach <= 0:
-            return out
+            return torch.zeros(b, dtype=state.pos.dtype, device=state.pos.device)
         first, second = close_pairs(state.pos, self.ramp_reach)
         flat, grp = state.pos.reshape(-1, 2), state.group.reshape(-1)
-        d = safe_norm(flat[first] - flat[second])  # (P,) as the dense d_ij
-        weight, slope = self._ramp(grp[first] == grp[second])
-        return out.index_add(0, first // n, torch.relu(2 * weight - d * slope))
+        weight, slope = self._ramp(torch.tensor([True, False], device=flat.device))  # (2,): within a group, across
+        return near_ramps(flat, first, second, grp[first] == grp[second], weight, slope, b, n)
 
     def metrics(self, state: FormationState) -> dict[str, Tensor]:
         """Per step, (B,) each: collisions, the number of unordered pairs closer than the collision distance d_c."""

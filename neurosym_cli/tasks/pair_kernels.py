@@ -111,13 +111,16 @@ def cell_ranges(sorted_key: np.ndarray, query: np.ndarray, start: np.ndarray, co
 
 
 @njit(**_JIT)
-def cell_candidates(flat: np.ndarray, order: np.ndarray, start: np.ndarray, count: np.ndarray, reach2: np.float64,
-                    first: np.ndarray, second: np.ndarray) -> np.int64:
-    """The cell list's candidate pairs (a, s), a < s, in tasks/pairs.py ``close_pairs``' order (agent a = row // 9,
-    its 9 neighbour cells in turn, each cell's agents in sorted order), kept when closer than a radius a hair above
-    the one asked (reach2: that radius squared, float64), so that torch's exact test then runs on those few. flat
-    (B N, 2) float64 positions; order (B N,) agents sorted by cell; start, count (B N 9,) each query's range in it;
-    first, second (sum of count,) int64, filled in place; returns how many were kept."""
+def cell_pairs(flat: np.ndarray, order: np.ndarray, start: np.ndarray, count: np.ndarray, radius, exact: bool,
+               inclusive: bool, first: np.ndarray, second: np.ndarray) -> np.int64:
+    """The cell list's pairs (a, s), a < s, in tasks/pairs.py ``close_pairs``' order (agent a = row // 9, its 9
+    neighbour cells in turn, each cell's agents in sorted order), kept where safe_norm(x_a - x_s) < radius (<= with
+    ``inclusive``) in flat's own float arithmetic, as the torch test computes it (``exact=False``: where the squared
+    distance is at most radius squared, a superset for a torch test to follow: the path before the exact test was
+    compiled, which benchmarks/bench_swarm_retrain.py's 'before' runs). flat (B N, 2) float32 or float64
+    positions, radius of its dtype; order (B N,) agents sorted by cell; start, count (B N 9,) each query's range in
+    it; first, second (sum of count,) int64, filled in place; returns how many were kept."""
+    eps = flat.dtype.type(1e-12)
     m = 0
     for row in range(start.shape[0]):
         a = row // 9
@@ -125,10 +128,61 @@ def cell_candidates(flat: np.ndarray, order: np.ndarray, start: np.ndarray, coun
         for t in range(count[row]):
             s = order[start[row] + t]
             if a < s:
-                dx = flat[s, 0] - ax
-                dy = flat[s, 1] - ay
-                if dx * dx + dy * dy <= reach2:
+                dx = ax - flat[s, 0]
+                dy = ay - flat[s, 1]
+                q = dx * dx + dy * dy
+                if exact:
+                    d = np.sqrt(max(q, eps))
+                    keep = d < radius or (inclusive and d == radius)
+                else:
+                    keep = q <= radius * radius
+                if keep:
                     first[m] = a
                     second[m] = s
                     m += 1
     return m
+
+
+@njit(**_JIT)
+def ramp_sums(flat: np.ndarray, first: np.ndarray, second: np.ndarray, kind: np.ndarray, weight: np.ndarray,
+              slope: np.ndarray, n: np.int64, out: np.ndarray, dist: np.ndarray) -> None:
+    """tasks/pairs.py ``near_ramps``' forward, its torch ops' float32 arithmetic in their order: out (B,) float32 zeros
+    += relu(2 p - d slope) of each pair (first, second (P,) flat indices into flat (B N, 2) float32; kind (P,) 0 for
+    a pair of one group, 1 across; weight, slope (2,) float32 by kind), added in pair order into its episode
+    first // n, as index_add does; dist (P,) <- each pair's d, for the backward."""
+    two, eps = np.float32(2), np.float32(1e-12)
+    for p in range(first.shape[0]):
+        a, s, k = first[p], second[p], kind[p]
+        dx = flat[a, 0] - flat[s, 0]
+        dy = flat[a, 1] - flat[s, 1]
+        d = np.sqrt(max(dx * dx + dy * dy, eps))
+        dist[p] = d
+        r = two * weight[k] - d * slope[k]
+        if r > 0:
+            out[a // n] += r
+
+
+@njit(**_JIT)
+def ramp_grads(flat: np.ndarray, first: np.ndarray, second: np.ndarray, kind: np.ndarray, weight: np.ndarray,
+               slope: np.ndarray, n: np.int64, dist: np.ndarray, grad: np.ndarray, g_first: np.ndarray,
+               g_second: np.ndarray) -> None:
+    """Back through ``ramp_sums`` as autograd goes back through its torch ops, in their float32 arithmetic: grad (B,)
+    the sums' gradient -> g_first, g_second (B N, 2) float32 zeros += each pair's gradient at its first and at its
+    second agent, in pair order (the two index backwards); the caller adds them."""
+    two, eps = np.float32(2), np.float32(1e-12)
+    for p in range(first.shape[0]):
+        a, s, k = first[p], second[p], kind[p]
+        d = dist[p]
+        if not two * weight[k] - d * slope[k] > 0:  # relu: no gradient where the ramp is 0
+            continue
+        dx = flat[a, 0] - flat[s, 0]
+        dy = flat[a, 1] - flat[s, 1]
+        if not dx * dx + dy * dy >= eps:  # clamp(min=eps): none below it
+            continue
+        gq = (-grad[a // n] * slope[k]) / (two * d)  # through d = sqrt(q) and the product d slope
+        gx = gq * dx + gq * dx  # q = dx dx + dy dy: x * x gives its gradient twice
+        gy = gq * dy + gq * dy
+        g_first[a, 0] += gx
+        g_first[a, 1] += gy
+        g_second[s, 0] += -gx
+        g_second[s, 1] += -gy

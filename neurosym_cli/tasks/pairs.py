@@ -18,6 +18,7 @@ nothing else, so results do not depend on the chunk size or on which pairs a pro
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING
 
 from ..utils.lazy import LazyModule
@@ -249,8 +250,10 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
         sorted_key = key[order]
         offs = torch.tensor([dy * w + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)], device=dev)
         query = key[:, None] + offs[None, :]  # (B N, 9) the neighbour cells of each agent
-        if _numba_on(pos):  # the candidates by the compiled loop, a hair beyond the radius; the exact test below
-            first, second = _candidates_compiled(flat, order, sorted_key, query, radius)
+        if _numba_on(pos) and COMPILED_LOOPS:  # the pairs and their exact test by the compiled loop
+            return _pairs_compiled(flat, order, sorted_key, query, radius, inclusive)
+        if _numba_on(pos):  # candidates by the compiled loop, a hair beyond the radius; the exact test below
+            first, second = _pairs_compiled(flat.double(), order, sorted_key, query, radius * (1 + 1e-4), None)
         else:
             start = torch.searchsorted(sorted_key, query, right=False).reshape(-1)
             count = torch.searchsorted(sorted_key, query, right=True).reshape(-1) - start
@@ -265,20 +268,19 @@ def close_pairs(pos: Tensor, radius: float, inclusive: bool = False) -> tuple[Te
 
 
 COMPILED_LOOPS = True
-"""close_pairs' cell ranges by ``cell_ranges``' table where its span allows, and Offsets.at's noise by ``noise_at``
-(False: torch.searchsorted and counter_normal's ops, the same numbers; benchmarks/bench_swarm_retrain.py compares
-their speed)"""
+"""close_pairs' cell ranges by ``cell_ranges``' table where its span allows and its exact test inside the compiled
+loop, Offsets.at's noise by ``noise_at``, the collision ramps by ``near_ramps``' kernels (False: torch.searchsorted
+and torch's test, counter_normal's ops and the ramps' torch ops, the same numbers; benchmarks/bench_swarm_retrain.py
+compares their speed)"""
 
 
-def _candidates_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query: Tensor, radius: float
-                         ) -> tuple[Tensor, Tensor]:
-    """close_pairs' candidates (first < second, in its order) closer than radius (1 + 1e-4) in float64 (a superset of
-    the pairs the float32 or float64 test keeps), by tasks/pair_kernels.py ``cell_candidates``; each query cell's
-    range of the sorted keys by ``cell_ranges`` (a table over the keys' span: torch.searchsorted's ranges, where a
-    cell holds agents), or by torch.searchsorted where that span is much wider than the team."""
-    import numpy as np
-
-    from .pair_kernels import cell_candidates, cell_ranges
+def _pairs_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query: Tensor, radius: float,
+                    inclusive: bool | None) -> tuple[Tensor, Tensor]:
+    """close_pairs' pairs (first < second, in its order, its exact test) by tasks/pair_kernels.py ``cell_pairs``
+    (``inclusive=None``: the candidates within ``radius`` by squared distance, for a torch test to follow);
+    each query cell's range of the sorted keys by ``cell_ranges`` (a table over the keys' span: torch.searchsorted's
+    ranges, where a cell holds agents), or by torch.searchsorted where that span is much wider than the team."""
+    from .pair_kernels import cell_pairs, cell_ranges
 
     q = query.reshape(-1)
     span = int(sorted_key[-1] - sorted_key[0]) + 1
@@ -292,11 +294,56 @@ def _candidates_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query:
     total = int(count.sum())
     first = torch.empty(total, dtype=torch.long)
     second = torch.empty(total, dtype=torch.long)
-    reach = radius * (1 + 1e-4)
-    m = cell_candidates(flat.detach().double().contiguous().numpy(), order.contiguous().numpy(),
-                        start.contiguous().numpy(), count.contiguous().numpy(), np.float64(reach * reach),
-                        first.numpy(), second.numpy())
+    f = flat.detach().contiguous().numpy()
+    m = cell_pairs(f, order.contiguous().numpy(), start.contiguous().numpy(), count.contiguous().numpy(),
+                   f.dtype.type(radius), inclusive is not None, bool(inclusive), first.numpy(), second.numpy())
     return first[:m], second[:m]
+
+
+def near_ramps(flat: Tensor, first: Tensor, second: Tensor, same: Tensor, weight: Tensor, slope: Tensor, batch: int,
+               n: int) -> Tensor:
+    """(B,) the sum over the given pairs of relu(2 p - d_ij slope), d_ij = safe_norm(x_i - x_j) (the collision
+    ramps of tasks/formation.py over ``close_pairs``): flat (B N, 2) positions, first, second (P,) flat indices,
+    same (P,) bool (the pair is of one group), weight, slope (2,) the ramp's p and p / d within a group and across.
+    On a CPU with numba, float32, one compiled pass each way (tasks/pair_kernels.py ramp_sums, ramp_grads) doing
+    torch's float32 arithmetic in torch's order, so the sums and their gradients are the torch ops' bit for bit
+    (tests/test_pairs.py); else those torch ops."""
+    from .base import safe_norm
+
+    if COMPILED_LOOPS and _numba_on(flat) and flat.dtype == torch.float32:
+        return _near_ramps_function().apply(flat, first, second, (~same).long(), weight, slope, batch, n)
+    kind = (~same).long()
+    d = safe_norm(flat[first] - flat[second])  # (P,)
+    return flat.new_zeros(batch).index_add(0, first // n, torch.relu(2 * weight[kind] - d * slope[kind]))
+
+
+@functools.cache
+def _near_ramps_function() -> type:
+    """``near_ramps`` by the compiled kernels as an autograd function with their own backward (the torch ops'
+    gradients, bit for bit); built on first use, so that importing this module does not import torch."""
+    from .pair_kernels import ramp_grads, ramp_sums
+
+    class NearRamps(torch.autograd.Function):
+        @staticmethod
+        def forward(ctx, flat, first, second, kind, weight, slope, batch, n):
+            f, a, s, k, w, sl = (t.detach().contiguous() for t in (flat, first, second, kind, weight, slope))
+            out = torch.zeros(batch, dtype=flat.dtype)
+            dist = torch.empty(a.numel(), dtype=flat.dtype)
+            ramp_sums(f.numpy(), a.numpy(), s.numpy(), k.numpy(), w.numpy(), sl.numpy(), n, out.numpy(),
+                      dist.numpy())
+            ctx.save_for_backward(f, a, s, k, w, sl, dist)
+            ctx.n = n
+            return out
+
+        @staticmethod
+        def backward(ctx, grad):
+            f, a, s, k, w, sl, dist = ctx.saved_tensors
+            g_first, g_second = torch.zeros_like(f), torch.zeros_like(f)
+            ramp_grads(f.numpy(), a.numpy(), s.numpy(), k.numpy(), w.numpy(), sl.numpy(), ctx.n, dist.numpy(),
+                       grad.contiguous().numpy(), g_first.numpy(), g_second.numpy())
+            return g_first + g_second, None, None, None, None, None, None, None
+
+    return NearRamps
 
 
 def within(pos: Tensor, radius: float) -> Tensor:
