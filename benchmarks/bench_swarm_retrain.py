@@ -6,6 +6,7 @@ alternated in one process so that both see the same load.
 
     python benchmarks/bench_swarm_retrain.py                         # N = 1,000, B = 2, T = 200, 6 steps each
     python benchmarks/bench_swarm_retrain.py --agents 300 --horizon 50 --steps 4       # a quick look
+    python benchmarks/bench_swarm_retrain.py --paths before,now,ramps-torch    # also now without the ramps' kernels
 
 One optimizer step = one BPTT rollout of B episodes of T steps under the program (the swarm's reset, the
 transformer over the picks, the collision cost by the cell list), backward, Adam, as retraining runs it. Both paths
@@ -36,8 +37,9 @@ from neurosym_cli.tasks.swarm import SwarmConfig, SwarmTask
 
 PROGRAM = "argmax(map(-1.0*d, filter(theta >= -1.85, l)))\nrandom(filter(d >= 3.6, l))"
 """the program of docs/performance.md section 15 (the nearest agent ahead, a random one at least 3.6 away)"""
-PATHS = {"before": (10 ** 9, False), "now": (0, True)}
-"""path -> (scan.CELLS_FROM, pairs.COMPILED_LOOPS)"""
+PATHS = {"before": (10 ** 9, False, False), "now": (0, True, True), "ramps-torch": (0, True, False)}
+"""path -> (scan.CELLS_FROM, pairs.COMPILED_LOOPS, pairs.COMPILED_RAMPS); 'ramps-torch' is now with the collision
+ramps as torch ops (what their kernels buy)"""
 
 
 def _steps(env, path: str, *, batch: int, horizon: int, program: str):
@@ -51,7 +53,7 @@ def _steps(env, path: str, *, batch: int, horizon: int, program: str):
     mine = torch.random.get_rng_state()
     while True:
         torch.random.set_rng_state(mine)  # dropout's stream, as if this path ran alone
-        scan.CELLS_FROM, pairs.COMPILED_LOOPS = PATHS[path]
+        scan.CELLS_FROM, pairs.COMPILED_LOOPS, pairs.COMPILED_RAMPS = PATHS[path]
         t0, c0 = time.perf_counter(), time.process_time()
         state = env.reset(batch, gen)[0]
         traj = rollout(env, policy, comm, state, rng, horizon, stats=False)
@@ -97,7 +99,11 @@ def main() -> None:
             with open(args.json, "w") as f:
                 json.dump(row, f, indent=1)
         return
-    row["losses_equal"] = row["before"]["losses"] == row["now"]["losses"]
+    row["losses_equal"] = all(row[p]["losses"] == row["now"]["losses"] for p in paths)
+    if "ramps-torch" in paths:
+        row["ratio_cpu_ramps"] = row["ramps-torch"]["cpu_s_per_rollout"] / row["now"]["cpu_s_per_rollout"]
+        print(f"the ramps' kernels: {row['ramps-torch']['cpu_s_per_rollout']:.2f} -> "
+              f"{row['now']['cpu_s_per_rollout']:.2f} CPU s a rollout ({row['ratio_cpu_ramps']:.2f}x)")
     row["ratio_cpu"] = row["before"]["cpu_s_per_rollout"] / row["now"]["cpu_s_per_rollout"]
     row["ratio_wall"] = row["before"]["wall_s_per_rollout"] / row["now"]["wall_s_per_rollout"]
     print(f"N = {args.agents:,}, B = {args.batch}, T = {args.horizon}: before "

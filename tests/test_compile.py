@@ -364,8 +364,9 @@ def test_fused_on_teams_below_the_kernels_size_resumes_as_eager(monkeypatch):
 
 
 def test_the_profile_benchmark_splits_a_step_by_part(tmp_path):
-    """benchmarks/bench_compile.py --profile on a small case: every part's seconds are >= 0 and add up to the step,
-    and the fused kernels' backward is counted under fused only."""
+    """benchmarks/bench_compile.py --profile on a small case: every part's seconds are >= 0, the named parts hold
+    most of the step (the functions they name exist and are found), and the fused kernels' backward is counted
+    under fused only."""
     import json
     import subprocess
     import sys
@@ -379,7 +380,10 @@ def test_the_profile_benchmark_splits_a_step_by_part(tmp_path):
     eager, fused = json.loads(out.read_text())
     for row in (eager, fused):
         parts = row["parts_s_per_step"]
-        assert all(v >= 0 for v in parts.values()) and parts["transformer forward (rounds, read-out)"] > 0
-        assert sum(parts.values()) == pytest.approx(row["total_s_per_step"], abs=0.01)
+        assert all(v >= 0 for v in parts.values())
+        named = {k: v for k, v in parts.items() if not k.startswith("the rest")}
+        assert all(named[k] > 0 for k in ("observe (the task's observation and noise)", "task dynamics and cost",
+                                          "transformer forward (rounds, read-out)", "backward: autograd's own ops"))
+        assert sum(named.values()) > 0.5 * row["total_s_per_step"]
     assert eager["parts_s_per_step"]["backward: fused pair kernels"] == 0
     assert fused["parts_s_per_step"]["backward: fused pair kernels"] > 0

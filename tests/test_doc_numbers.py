@@ -134,7 +134,20 @@ def swarm_retrain() -> tuple[str, ...]:
     rollout before and now, alternated in one process, and their ratio."""
     r = json.loads((ROOT / "docs" / "results" / "bench-swarm-retrain.json").read_text())["alternated_in_one_process"]
     return (f"{r['before']['cpu_s_per_rollout']:.2f}", f"{r['now']['cpu_s_per_rollout']:.2f}",
-            f"{r['ratio_cpu']:.2f}")
+            f"{r['ratio_cpu']:.2f}", f"{r['ramps-torch']['cpu_s_per_rollout']:.2f}", f"{r['ratio_cpu_ramps']:.2f}")
+
+
+def collision_cost_ms() -> tuple[str, ...]:
+    """The same file's collision cost, forward and backward, ms a call: the previous commit's two runs, then this
+    one's."""
+    r = json.loads((ROOT / "docs" / "results" / "bench-swarm-retrain.json").read_text())["collision_cost_ms"]
+    return tuple(f"{x:.2f}" for x in r["previous"] + r["this"])
+
+
+def round_ratios() -> tuple[str, ...]:
+    """bench_compile.py --round's rows in docs/results/bench-compile-profile.json: eager / fused at N = 20-200."""
+    r = json.loads((ROOT / "docs" / "results" / "bench-compile-profile.json").read_text())["round_rows"]
+    return tuple(f"{x['ratio']:.2f}" for x in r if x["agents"] >= 20)
 
 
 def compile_profile() -> tuple[str, ...]:
@@ -181,7 +194,12 @@ CHECKS = [
     Check("docs/fidelity.md", r"`select\.finalists` \((\d+)\)", select_finalists),
     Check("docs/extending.md", r"`optim\.grad_clip`, a norm of ([\d.]+)", grad_clip),
     Check("docs/performance.md",
-          r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*", swarm_retrain),
+          r"with today's hash\) ([\d.]+) CPU s a rollout against ([\d.]+) now, \*\*([\d.]+)x\*\*, and ([\d.]+) "
+          r"now with the ramps as torch ops \(`pairs.COMPILED_RAMPS`\): the ramps' kernels buy ([\d.]+)x",
+          swarm_retrain),
+    Check("docs/performance.md", r"went from ([\d.]+) and ([\d.]+) ms to ([\d.]+) and ([\d.]+) ms", collision_cost_ms),
+    Check("docs/performance.md", r"the `--round` rows, in the same file: ([\d.]+), ([\d.]+), ([\d.]+), ([\d.]+) at",
+          round_ratios),
     Check("docs/performance.md", r"\| \*\*total\*\* \| \*\*([\d.]+)\*\* \| \*\*([\d.]+)\*\* \|", compile_profile),
     Check("docs/performance.md", r"\| fused / eager \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \|", compile_growth),
     Check("docs/fidelity.md", r"so it now runs b14: test loss ([\d.]+), max out ([\d.]+) against ([\d.]+)",

@@ -69,23 +69,49 @@ def test_the_compiled_cell_list_gives_the_torch_pairs_in_their_order(spread, mon
                 assert ref[0].numel() > 0
 
 
-def test_the_compiled_ramps_are_the_torch_ramps_and_gradients_bit_for_bit(monkeypatch):
+@pytest.fixture
+def one_thread():
+    """torch at one thread (the default `threads=1`): the order the compiled ramps' backward reproduces."""
+    was = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(was)
+
+
+def test_the_compiled_ramps_are_the_torch_ramps_and_gradients_bit_for_bit(monkeypatch, one_thread):
     """near_ramps by its kernels (sums in index_add's order, the backward in autograd's arithmetic) against its torch
-    ops, in float32, on a crowded swarm: the sums and the positions' gradient equal bit for bit."""
+    ops, in float32, on a crowded swarm with coincident agents: the sums and the positions' gradient equal bit for
+    bit at one thread."""
     if not pairs._numba_on(torch.zeros(1)):
         pytest.skip("numba is not installed (the compiled ramps need it)")
     s = _scattered(3, 500, 9.0, dtype=torch.float32)
+    s = dataclasses.replace(s, pos=torch.cat([s.pos.detach()[:, :490], s.pos.detach()[:, :10]], 1))  # coincident
     env = _cross(0)
     w = torch.randn(3, generator=torch.Generator().manual_seed(1))
     got = {}
-    for loops in (True, False):
-        monkeypatch.setattr(pairs, "COMPILED_LOOPS", loops)
+    for ramps in (True, False):
+        monkeypatch.setattr(pairs, "COMPILED_RAMPS", ramps)
         pos = s.pos.detach().clone().requires_grad_()
         cost = env.collision_cost(dataclasses.replace(s, pos=pos))
+        assert (type(cost.grad_fn).__name__ == "NearRampsBackward") == ramps  # the kernels ran, or the torch ops
         grad, = torch.autograd.grad((cost * w).sum(), pos)
-        got[loops] = cost.detach(), grad
+        got[ramps] = cost.detach(), grad
     assert got[True][0].min() > 0 and (got[True][1] != 0).float().mean() > 0.5
     assert torch.equal(got[True][0], got[False][0]) and torch.equal(got[True][1], got[False][1])
+
+
+def test_a_nan_in_a_ramp_is_a_nan_in_its_sum_on_both_paths(monkeypatch):
+    """A NaN weight (a task with collision_weight = 0 and collision_dist = 0: slope 0 / 0) reaches the sum as
+    through torch's relu, never dropped."""
+    if not pairs._numba_on(torch.zeros(1)):
+        pytest.skip("numba is not installed (the compiled ramps need it)")
+    flat = torch.tensor([[0.0, 0.0], [0.5, 0.0], [3.0, 0.0], [3.2, 0.0]])
+    first, second, same = torch.tensor([0, 2]), torch.tensor([1, 3]), torch.tensor([True, False])
+    weight, slope = torch.tensor([5.0, 0.0]), torch.tensor([5.0, float("nan")])
+    for ramps in (True, False):
+        monkeypatch.setattr(pairs, "COMPILED_RAMPS", ramps)
+        out = pairs.near_ramps(flat, first, second, same, weight, slope, 2, 2)
+        assert out[0] == 7.5 and out[1].isnan()
 
 
 @pytest.mark.parametrize("n, spread", [(40, 3.0), (300, 25.0)])

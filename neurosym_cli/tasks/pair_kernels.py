@@ -158,7 +158,7 @@ def ramp_sums(flat: np.ndarray, first: np.ndarray, second: np.ndarray, kind: np.
         d = np.sqrt(max(dx * dx + dy * dy, eps))
         dist[p] = d
         r = two * weight[k] - d * slope[k]
-        if r > 0:
+        if not r <= 0:  # relu: a NaN passes, as torch's does
             out[a // n] += r
 
 

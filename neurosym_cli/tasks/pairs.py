@@ -272,6 +272,9 @@ COMPILED_LOOPS = True
 loop, Offsets.at's noise by ``noise_at``, the collision ramps by ``near_ramps``' kernels (False: torch.searchsorted
 and torch's test, counter_normal's ops and the ramps' torch ops, the same numbers; benchmarks/bench_swarm_retrain.py
 compares their speed)"""
+COMPILED_RAMPS = True
+"""``near_ramps`` by its kernels (False: its torch ops alone, the same numbers at threads=1; the benchmark's path
+'ramps-torch' measures what the kernels buy)"""
 
 
 def _pairs_compiled(flat: Tensor, order: Tensor, sorted_key: Tensor, query: Tensor, radius: float,
@@ -306,11 +309,13 @@ def near_ramps(flat: Tensor, first: Tensor, second: Tensor, same: Tensor, weight
     ramps of tasks/formation.py over ``close_pairs``): flat (B N, 2) positions, first, second (P,) flat indices,
     same (P,) bool (the pair is of one group), weight, slope (2,) the ramp's p and p / d within a group and across.
     On a CPU with numba, float32, one compiled pass each way (tasks/pair_kernels.py ramp_sums, ramp_grads) doing
-    torch's float32 arithmetic in torch's order, so the sums and their gradients are the torch ops' bit for bit
-    (tests/test_pairs.py); else those torch ops."""
+    torch's float32 arithmetic in torch's one-thread order, so the sums and their gradients are the torch ops' bit
+    for bit at threads=1, the default (tests/test_pairs.py); with more threads torch's index backward splits its
+    sums by thread, and the two agree to float rounding, as torch's own numbers across thread counts do. Else
+    those torch ops."""
     from .base import safe_norm
 
-    if COMPILED_LOOPS and _numba_on(flat) and flat.dtype == torch.float32:
+    if COMPILED_LOOPS and COMPILED_RAMPS and _numba_on(flat) and flat.dtype == weight.dtype == torch.float32:
         return _near_ramps_function().apply(flat, first, second, (~same).long(), weight, slope, batch, n)
     kind = (~same).long()
     d = safe_norm(flat[first] - flat[second])  # (P,)
@@ -321,6 +326,8 @@ def near_ramps(flat: Tensor, first: Tensor, second: Tensor, same: Tensor, weight
 def _near_ramps_function() -> type:
     """``near_ramps`` by the compiled kernels as an autograd function with their own backward (the torch ops'
     gradients, bit for bit); built on first use, so that importing this module does not import torch."""
+    from torch.autograd.function import once_differentiable
+
     from .pair_kernels import ramp_grads, ramp_sums
 
     class NearRamps(torch.autograd.Function):
@@ -336,6 +343,7 @@ def _near_ramps_function() -> type:
             return out
 
         @staticmethod
+        @once_differentiable
         def backward(ctx, grad):
             f, a, s, k, w, sl, dist = ctx.saved_tensors
             g_first, g_second = torch.zeros_like(f), torch.zeros_like(f)
