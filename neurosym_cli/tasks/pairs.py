@@ -315,9 +315,9 @@ def near_ramps(flat: Tensor, first: Tensor, second: Tensor, same: Tensor, weight
     those torch ops."""
     from .base import safe_norm
 
+    kind = (~same).long()  # (P,) 0 within a group, 1 across: the index into weight and slope
     if COMPILED_LOOPS and COMPILED_RAMPS and _numba_on(flat) and flat.dtype == weight.dtype == torch.float32:
-        return _near_ramps_function().apply(flat, first, second, (~same).long(), weight, slope, batch, n)
-    kind = (~same).long()
+        return _near_ramps_function().apply(flat, first, second, kind, weight, slope, batch, n)
     d = safe_norm(flat[first] - flat[second])  # (P,)
     return flat.new_zeros(batch).index_add(0, first // n, torch.relu(2 * weight[kind] - d * slope[kind]))
 
