@@ -172,6 +172,20 @@ def cross_seed2_det() -> tuple[str, ...]:
             f"{b['prog-retrained']['summary']['max_out']['mean']:.2f}")
 
 
+def margin_claim_counts() -> tuple[str, ...]:
+    """benchmarks/front_margin.py's committed run (docs/results/front-margin.json): the paper's claims held over the
+    nine task-seeds at margin 0.01, per task (random-cross, random-grid, unlabeled-goals), then at 0.02 in all and
+    for the two formation tasks, at 0.005 and 0 (one number: the doc states them as equal) and at null."""
+    rows = json.loads((ROOT / "docs" / "results" / "front-margin.json").read_text())
+
+    def held(margin, task=None) -> str:
+        return str(sum(sum(r["holds"].values()) for r in rows if r["margin"] == margin and task in (None, r["task"])))
+
+    return (held(0.01), held(0.01, "random-cross"), held(0.01, "random-grid"), held(0.01, "unlabeled-goals"),
+            held(0.02), held(0.02, "random-cross"), held(0.02, "random-grid"),
+            held(0.005) if held(0.005) == held(0.0) else f"{held(0.005)} and {held(0.0)}", held(None))
+
+
 @dataclass(frozen=True)
 class Check:
     doc: str  # path from the repository root
@@ -204,6 +218,10 @@ CHECKS = [
     Check("docs/performance.md", r"\| fused / eager \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \|", compile_growth),
     Check("docs/fidelity.md", r"so it now runs b14: test loss ([\d.]+), max out ([\d.]+) against ([\d.]+)",
           cross_seed2_det),
+    Check("docs/fidelity.md", r"are (\d+) of 48 at 0\.01 \(random-cross (\d+) of 18, random-grid (\d+) of 18, "
+          r"unlabeled-goals (\d+) of 12\), (\d+) at 0\.02 \(random-cross (\d+), random-grid (\d+)\), (\d+) at 0\.005 "
+          r"and at 0, which pick denser programs \(random-grid seed 0: [\d.]+ against [\d.]+\), and (\d+) at null",
+          margin_claim_counts),
     Check("docs/extending.md", r"at most (\d+) rules in a round, filters nested at most (\d+) deep, ([\d,]+) "
           r"characters a line", parser_limits),
 ]
