@@ -186,6 +186,18 @@ def margin_claim_counts() -> tuple[str, ...]:
             held(0.005) if held(0.005) == held(0.0) else f"{held(0.005)} and {held(0.0)}", held(None))
 
 
+def main_job_across_vendors() -> tuple[str, ...]:
+    """The README's main job on an AMD EPYC (docs/results/main-job/seeds.json) and on an Intel Xeon
+    (docs/results/main-job-intel/seeds.json): on how many of the seeds every baseline's summary, program and front
+    pick is alike, and of how many; each file must name its vendor."""
+    amd = json.loads(MAIN_JOB.read_text())
+    intel = json.loads((ROOT / "docs" / "results" / "main-job-intel" / "seeds.json").read_text())
+    assert (amd["machine"]["cpu_vendor"], intel["machine"]["cpu_vendor"]) == ("AuthenticAMD", "GenuineIntel")
+    keys = ("baselines", "programs", "front_picks")
+    alike = [s for s in amd["seeds"] if all(amd["seeds"][s][k] == intel["seeds"].get(s, {}).get(k) for k in keys)]
+    return str(len(alike)), str(len(amd["seeds"]))
+
+
 @dataclass(frozen=True)
 class Check:
     doc: str  # path from the repository root
@@ -197,6 +209,10 @@ class Check:
 CHECKS = [
     Check("README.md", r"a random agent at least ([\d.]+) away", gif_threshold, times=2),  # the GIF's alt and caption
     Check("README.md", r"within 5 % of tf-full on (\d+) of the (\d+) seeds", within_five),
+    Check("README.md", r"every program and every front pick alike on (\d+) of the (\d+) seeds",
+          main_job_across_vendors),
+    Check("docs/reliability.md", r"every program and every front pick is alike on (\d+) of the (\d+) seeds",
+          main_job_across_vendors),
     Check("README.md", r"\(tf-full\) has loss ([\d.]+) ± ([\d.]+)", seed0_tf_full),
     Check("README.md", r"\(prog-retrained\) the loss is ([\d.]+) ± ([\d.]+) while the agent that hears most "
           r"hears ([\d.]+)", seed0_prog_retrained),
